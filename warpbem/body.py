@@ -1,0 +1,80 @@
+"""Rigid bodies: a reference mesh placed in the world, free or held fixed."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .mesh import Mesh
+
+
+def _vector(name, value, length):
+    try:
+        arr = np.array(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"{name} must be {length} numbers, got {value!r}") from err
+    if arr.shape != (length,):
+        raise ValueError(f"{name} must have {length} components, got shape {np.shape(value)}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite, got {arr.tolist()}")
+    arr.setflags(write=False)
+    return arr
+
+
+def rotation_matrix(quaternion) -> np.ndarray:
+    """Rotation matrix of a unit quaternion (w, x, y, z)."""
+    w, x, y, z = quaternion
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class Body:
+    """A rigid body: ``mesh`` (metres, about its reference point) at ``position`` (m), turned by
+    the unit quaternion ``orientation`` (w, x, y, z; normalised here).
+
+    ``fixed=False``: free; its velocity follows from the force and torque applied to it.
+    ``fixed=True``: held; it moves with the prescribed ``velocity`` (m/s) and
+    ``angular_velocity`` (rad/s), zero by default (an adherent cell at rest), and the solver
+    returns the force and torque needed to hold it.
+    """
+
+    mesh: Mesh
+    position: tuple = (0.0, 0.0, 0.0)
+    orientation: tuple = (1.0, 0.0, 0.0, 0.0)
+    fixed: bool = False
+    velocity: tuple = (0.0, 0.0, 0.0)
+    angular_velocity: tuple = (0.0, 0.0, 0.0)
+
+    def __post_init__(self):
+        if not isinstance(self.mesh, Mesh):
+            raise TypeError(f"mesh must be a warpbem.mesh.Mesh, got {type(self.mesh).__name__}")
+        object.__setattr__(self, "position", _vector("position", self.position, 3))
+        q = _vector("orientation", self.orientation, 4)
+        norm = np.linalg.norm(q)
+        if norm < 1e-12:
+            raise ValueError("orientation quaternion must be non-zero")
+        q = q / norm
+        q.setflags(write=False)
+        object.__setattr__(self, "orientation", q)
+        if not isinstance(self.fixed, (bool, np.bool_)):
+            raise TypeError(f"fixed must be True or False, got {self.fixed!r}")
+        velocity = _vector("velocity", self.velocity, 3)
+        angular_velocity = _vector("angular_velocity", self.angular_velocity, 3)
+        if not self.fixed and (np.any(velocity) or np.any(angular_velocity)):
+            raise ValueError("a prescribed velocity needs fixed=True; free bodies get theirs from the solver")
+        object.__setattr__(self, "velocity", velocity)
+        object.__setattr__(self, "angular_velocity", angular_velocity)
+
+    def rotation(self) -> np.ndarray:
+        return rotation_matrix(self.orientation)
+
+    def world_nodes(self) -> np.ndarray:
+        """(n_nodes, 3) node positions in the world frame, metres."""
+        return self.mesh.nodes @ self.rotation().T + self.position

@@ -1,0 +1,99 @@
+"""Per-solve surface data of all bodies, in scaled units, on the host and on the device.
+
+Lengths are divided by ``length_scale`` (the mean equivalent radius of the bodies) so the
+kernels see O(1) numbers in either precision. Elements of all bodies are concatenated, body
+after body; ``body_start``/``body_end`` give each element the range of its own body.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import quad9, runtime
+from .refinement import refine_near_contact
+
+
+@dataclass(frozen=True, eq=False)
+class SurfaceGeometry:
+    length_scale: float  # metres per scaled unit
+    element_nodes: np.ndarray  # (E, 9, 3) scaled
+    body_of_element: np.ndarray  # (E,)
+    body_ranges: np.ndarray  # (n_bodies, 2) element index range of each body
+    centres: np.ndarray  # (n_bodies, 3) scaled reference points
+    collocation: np.ndarray  # (E, 3) element centres (node 8), the collocation points
+    element_radius: np.ndarray  # (E,) largest node distance from the centre node
+    areas: np.ndarray  # (E,) element areas with the operator's quadrature
+    qp_positions: np.ndarray  # (E, Q, 3)
+    qp_area_vectors: np.ndarray  # (E, Q, 3) outward normal * Jacobian * weight
+    order: int
+
+    @classmethod
+    def from_bodies(cls, bodies, order: int, length_scale: float, wall: bool,
+                    contact_refinement: float = 0.0) -> "SurfaceGeometry":
+        nodes = [b.world_nodes()[b.mesh.elements] / length_scale for b in bodies]
+        if contact_refinement > 0:
+            nodes = refine_near_contact(nodes, wall, contact_refinement)
+        counts = [len(n) for n in nodes]
+        element_nodes = np.concatenate(nodes)
+        stops = np.cumsum(counts)
+        ranges = np.stack([stops - counts, stops], axis=1)
+        positions, area_vectors = quad9.surface_quadrature(element_nodes, order)
+        centre = element_nodes[:, 8]
+        return cls(
+            length_scale=length_scale,
+            element_nodes=element_nodes,
+            body_of_element=np.repeat(np.arange(len(bodies)), counts),
+            body_ranges=ranges,
+            centres=np.array([b.position for b in bodies]) / length_scale,
+            collocation=centre,
+            element_radius=np.linalg.norm(element_nodes - centre[:, None], axis=-1).max(axis=1),
+            areas=np.linalg.norm(area_vectors, axis=-1).sum(axis=1),
+            qp_positions=positions,
+            qp_area_vectors=area_vectors,
+            order=order,
+        )
+
+    @property
+    def n_elements(self) -> int:
+        return len(self.collocation)
+
+    def rigid_modes(self, body: int) -> np.ndarray:
+        """(3 n, 6) rigid fields at the body's collocation points: e_l, then e_l x (xi - x_c)."""
+        start, stop = self.body_ranges[body]
+        rho = self.collocation[start:stop] - self.centres[body]
+        n = stop - start
+        modes = np.zeros((n, 3, 6))
+        modes[:, :, :3] = np.eye(3)
+        for axis in range(3):
+            modes[:, :, 3 + axis] = np.cross(np.eye(3)[axis], rho)
+        return modes.reshape(3 * n, 6)
+
+    def to_device(self, dtype_name: str, device):
+        """Warp arrays the kernels read (see kernels/assembly.py)."""
+        wp = runtime.init()
+        dtype = runtime.dtype_of(dtype_name)
+        vec3 = wp.types.vector(3, dtype)
+        gauss_x, gauss_w = np.polynomial.legendre.leggauss(self.order)
+
+        def vectors(a):
+            return wp.array(np.ascontiguousarray(a.reshape(-1, 3)), dtype=vec3, device=device)
+
+        def scalars(a):
+            return wp.array(np.ascontiguousarray(a), dtype=dtype, device=device)
+
+        counts = self.body_ranges[:, 1] - self.body_ranges[:, 0]
+        return dict(
+            poles=vectors(self.collocation),
+            nodes=vectors(self.element_nodes),
+            centres=vectors(self.collocation),
+            radii=scalars(self.element_radius),
+            qp_pos=vectors(self.qp_positions),
+            qp_area=vectors(self.qp_area_vectors),
+            n_qp=self.order**2,
+            gauss_x=scalars(gauss_x),
+            gauss_w=scalars(gauss_w),
+            body_start=wp.array(np.repeat(self.body_ranges[:, 0], counts).astype(np.int32), dtype=int, device=device),
+            body_end=wp.array(np.repeat(self.body_ranges[:, 1], counts).astype(np.int32), dtype=int, device=device),
+        )

@@ -1,0 +1,46 @@
+"""GMRES on a LinearOperator, with a result object and an error on non-convergence."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse.linalg as spla
+
+
+class ConvergenceError(RuntimeError):
+    """GMRES stopped before reaching its tolerance; the message gives iterations and residual."""
+
+
+@dataclass(frozen=True)
+class GMRESResult:
+    solution: np.ndarray
+    iterations: int
+    residual: float  # ||b - A x|| / ||b||, recomputed from the returned solution
+    converged: bool
+
+
+def gmres(operator: spla.LinearOperator, rhs: np.ndarray, tolerance: float = 1e-8,
+          restart: int = 60, max_iterations: int = 600, initial_guess=None) -> GMRESResult:
+    """Solve A x = b with SciPy's restarted GMRES; raise ConvergenceError if it fails."""
+    if not 0 < tolerance < 1:
+        raise ValueError(f"GMRES tolerance must lie in (0, 1), got {tolerance!r}")
+    rhs_norm = float(np.linalg.norm(rhs))
+    if rhs_norm == 0.0:
+        return GMRESResult(np.zeros_like(rhs), 0, 0.0, True)
+    iterations = 0
+
+    def count(_):
+        nonlocal iterations
+        iterations += 1
+
+    x, info = spla.gmres(operator, rhs, x0=initial_guess, rtol=tolerance, atol=0.0,
+                         restart=restart, maxiter=max(1, max_iterations // restart),
+                         callback=count, callback_type="pr_norm")
+    residual = float(np.linalg.norm(rhs - operator.matvec(x)) / rhs_norm)
+    if info != 0 or not np.all(np.isfinite(x)) or residual > 10 * tolerance:
+        raise ConvergenceError(
+            f"GMRES did not converge: {iterations} iterations, relative residual {residual:.3e}"
+            f" (tolerance {tolerance:.1e}, restart {restart})"
+        )
+    return GMRESResult(x, iterations, residual, True)

@@ -1,0 +1,257 @@
+"""Mobility of many rigid bodies in linear shear flow above a no-slip wall by the Completed
+Double Layer boundary element method (Power & Miranda 1987; Kim & Karrila 1991 ch. 17;
+thesis eq. 2.5-2.17).
+
+Scaled units inside (``length_scale`` L = mean equivalent radius, viscosity mu, velocity scale
+U0 from the data); SI at the API. The disturbance of the ambient flow u_inf = shear_rate z e_x
+is written as
+
+    w = D[q] + sum_p V_p,
+
+D the double layer of ``kernels/greens.py`` (wall images included when ``wall``), q a density
+constant per element, and V_p the completion of body p: a Stokeslet of strength F_p at its
+reference point x_p and, for its torque T_p, three pairs of Stokeslets +-(T_p x e_l)/(4 d) at
+x_p +- d e_l (a force couple whose moment is T_p). The double layer carries no force or torque,
+so (F_p, T_p) are the force and torque the body exerts on the fluid, i.e. the external load on
+a free body, or the load that holds a fixed one. Any interior singularity with that force and
+torque completes the representation; a couple of Stokeslets needs no rotlet-image formula.
+
+Boundary condition on body p (exterior limit of D is D^PV + q/2):
+
+    (1/2 + D^PV) q + sum V = U_p + Omega_p x (xi - x_p) - u_inf(xi).
+
+* Free body: the rigid velocity is unknown and set to -P_p q, where P_p is the projector onto
+  the body's six rigid fields, orthonormalised by Gram-Schmidt (a Cholesky factor of their Gram
+  matrix) in the discrete inner product <u, v> = sum_b u_b . v_b A_b (element areas A_b); this
+  is Wielandt's deflation that maps the rigid null space of (1/2 + D^PV) to eigenvalue 1
+  (thesis eq. 2.7-2.17). With this sign and scaling the whole spectrum lies in (0, 1]; the
+  thesis's second deflation (of its eigenvalue 2, eq. 2.15-2.16) is not needed for GMRES.
+* Fixed body (prescribed U_p, Omega_p, zero by default): (F_p, T_p) are unknowns, and six
+  extra equations <phi_p^l, q> = 0 remove the rigid part of q instead.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse.linalg as spla
+
+from .body import Body
+from .geometry import SurfaceGeometry
+from .linalg import gmres
+from .operators import DoubleLayerOperator, QuadratureOptions
+from .placement import check_placement
+
+FORCE_UNIT = 6.0 * np.pi  # scaled force of a unit-speed unit sphere; scales the load unknowns
+TORQUE_UNIT = 8.0 * np.pi
+
+
+@dataclass(frozen=True)
+class MobilitySolution:
+    """Rigid motion and loads of every body, SI units (rows in the order of the bodies).
+
+    velocity (m/s) and angular_velocity (rad/s) of each body's reference point; prescribed for
+    fixed bodies. force (N) and torque (N m, about the reference point): for free bodies the
+    given external ones; for fixed bodies the external load that holds them, which is minus the
+    hydrodynamic force and torque.
+    """
+
+    velocity: np.ndarray
+    angular_velocity: np.ndarray
+    force: np.ndarray
+    torque: np.ndarray
+    iterations: int
+    residual: float
+    converged: bool
+    operator_mode: str
+    solution_vector: np.ndarray  # scaled GMRES unknowns, for a warm start of a similar solve
+
+
+def _load_array(name, value, bodies):
+    n = len(bodies)
+    if value is None:
+        return np.zeros((n, 3))
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (n, 3):
+        raise ValueError(f"{name} must have shape ({n}, 3), one row per body; got {arr.shape}")
+    for i in range(n):
+        if not np.all(np.isfinite(arr[i])):
+            raise ValueError(f"{name}[{i}] (body {i}) is not finite: {arr[i].tolist()}")
+        if bodies[i].fixed and np.any(arr[i]):
+            raise ValueError(
+                f"{name}[{i}]: body {i} is fixed, so its {name[:-1]} is an output of the solver;"
+                " give external loads for free bodies only"
+            )
+    return arr
+
+
+def _finite(name, value, positive=False):
+    if not np.isscalar(value) or not np.isfinite(value) or (positive and value <= 0):
+        kind = "a positive finite number" if positive else "a finite number"
+        raise ValueError(f"{name} must be {kind}, got {value!r}")
+    return float(value)
+
+
+class CompletedDoubleLayer:
+    """The discrete CDL system: unknowns [q (3 E), (F, T)/(FORCE_UNIT, TORQUE_UNIT) per fixed body]."""
+
+    def __init__(self, geometry: SurfaceGeometry, operator: DoubleLayerOperator, fixed):
+        self.geometry = geometry
+        self.operator = operator
+        self.fixed = np.asarray(fixed, dtype=bool)
+        self.fixed_index = np.cumsum(self.fixed) - 1
+        self.n_density = 3 * geometry.n_elements
+        self.size = self.n_density + 6 * int(self.fixed.sum())
+        self.ranges = [slice(3 * a, 3 * b) for a, b in geometry.body_ranges]
+        self.weights = np.repeat(geometry.areas, 3)
+        self.modes, self.cholesky = [], []
+        for p, rows in enumerate(self.ranges):
+            raw = geometry.rigid_modes(p)
+            factor = np.linalg.cholesky(raw.T @ (self.weights[rows, None] * raw))
+            # Gram-Schmidt: orthonormal modes phi = raw L^-T, <phi_k, phi_l> = delta_kl
+            self.modes.append(scipy.linalg.solve_triangular(factor, raw.T, lower=True).T)
+            self.cholesky.append(factor)
+        self.fixed_columns = self._fixed_body_columns()
+
+    def completion(self, body: int, loads: np.ndarray):
+        """Poles (7, 3) and point forces (7, 3) of body p's completion for scaled (F, T)."""
+        start, stop = self.geometry.body_ranges[body]
+        centre = self.geometry.centres[body]
+        d = 0.25 * np.linalg.norm(self.geometry.collocation[start:stop] - centre, axis=1).min()
+        e = np.eye(3)
+        poles = np.concatenate([centre[None], centre + d * e, centre - d * e])
+        couple = np.cross(loads[3:], e) / (4.0 * d)  # (T x e_l) / (4 d), row l
+        return poles, np.concatenate([loads[None, :3], couple, -couple])
+
+    def _fixed_body_columns(self) -> np.ndarray:
+        columns = []
+        for p in np.flatnonzero(self.fixed):
+            for k in range(6):
+                unit = np.zeros(6)
+                unit[k] = FORCE_UNIT if k < 3 else TORQUE_UNIT
+                poles, forces = self.completion(p, unit)
+                columns.append(self.operator.point_force_velocity(self.geometry.collocation, poles, forces).ravel())
+        return np.array(columns).T if columns else np.zeros((self.n_density, 0))
+
+    def rigid_coefficients(self, body: int, density: np.ndarray) -> np.ndarray:
+        """<phi_p^l, q> for the six orthonormal modes of body p."""
+        rows = self.ranges[body]
+        return self.modes[body].T @ (self.weights[rows] * density[rows])
+
+    def matvec(self, x: np.ndarray) -> np.ndarray:
+        q = x[: self.n_density]
+        rigid = np.zeros_like(q)
+        out = np.empty_like(x)
+        for p, rows in enumerate(self.ranges):
+            coefficients = self.rigid_coefficients(p, q)
+            rigid[rows] = self.modes[p] @ coefficients
+            if self.fixed[p]:
+                k = self.n_density + 6 * self.fixed_index[p]
+                out[k : k + 6] = coefficients
+        # (1/2 + D) annihilates rigid fields exactly; apply it to the non-rigid part only, so
+        # the discretisation error of piecewise-constant rotations does not enter the motion
+        out[: self.n_density] = (self.operator.matvec(q - rigid) + rigid
+                                 + self.fixed_columns @ x[self.n_density :])
+        return out
+
+    def linear_operator(self) -> spla.LinearOperator:
+        return spla.LinearOperator((self.size, self.size), matvec=self.matvec, dtype=np.float64)
+
+    def rigid_velocity(self, body: int, x: np.ndarray) -> np.ndarray:
+        """(U, Omega) of a free body in scaled units: the rigid field -P_p q."""
+        coefficients = self.rigid_coefficients(body, x[: self.n_density])
+        return -scipy.linalg.solve_triangular(self.cholesky[body].T, coefficients, lower=False)
+
+
+def solve_mobility(
+    bodies,
+    shear_rate: float = 0.0,
+    viscosity: float = 1e-3,
+    wall: bool = True,
+    forces=None,
+    torques=None,
+    device="cpu",
+    *,
+    quadrature_order: int = 3,
+    adaptive_quadrature: bool = True,
+    tolerance: float = 1e-8,
+    max_iterations: int = 600,
+    dtype: str = "float64",
+    operator: str = "auto",
+    initial_guess=None,
+    contact_refinement: float = 1.0,
+) -> MobilitySolution:
+    """Rigid velocities of free bodies and holding loads of fixed ones (SI units).
+
+    bodies: list of ``Body``; shear_rate (1/s) of u = shear_rate * z e_x; viscosity (Pa s);
+    wall: no-slip plane z = 0 (else unbounded); forces, torques: (n_bodies, 3) external loads
+    on free bodies (N, N m), zero rows for fixed ones. quadrature_order: Gauss points per
+    direction; adaptive_quadrature: subdivide nearly singular elements; tolerance: GMRES
+    relative residual; dtype: "float64" or "float32" kernels; operator: "auto", "dense" or
+    "matrix_free"; initial_guess: a previous solution's ``solution_vector``.
+    """
+    bodies = list(bodies)
+    if not bodies:
+        raise ValueError("bodies must contain at least one Body")
+    for i, b in enumerate(bodies):
+        if not isinstance(b, Body):
+            raise TypeError(f"bodies[{i}] must be a warpbem.Body, got {type(b).__name__}")
+    shear_rate = _finite("shear_rate", shear_rate)
+    viscosity = _finite("viscosity", viscosity, positive=True)
+    forces = _load_array("forces", forces, bodies)
+    torques = _load_array("torques", torques, bodies)
+    quadrature = QuadratureOptions(order=quadrature_order, adaptive=bool(adaptive_quadrature))
+    check_placement(bodies, bool(wall))
+
+    length = float(np.mean([b.mesh.equivalent_radius() for b in bodies]))
+    fixed = np.array([b.fixed for b in bodies])
+    prescribed = np.array([np.concatenate([b.velocity, b.angular_velocity * length]) for b in bodies])
+    speed = max(abs(shear_rate) * length, np.abs(forces).max() / (viscosity * length),
+                np.abs(torques).max() / (viscosity * length**2), np.abs(prescribed).max())
+    speed = speed if speed > 0 else 1.0
+    force_scale = viscosity * speed * length  # N per scaled force unit
+
+    geometry = SurfaceGeometry.from_bodies(bodies, quadrature.order, length, bool(wall), contact_refinement)
+    double_layer = DoubleLayerOperator(geometry, bool(wall), quadrature, dtype, device, operator)
+    system = CompletedDoubleLayer(geometry, double_layer, fixed)
+
+    rhs = np.zeros(system.size)
+    xi = geometry.collocation
+    ambient = np.zeros_like(xi)
+    ambient[:, 0] = shear_rate * length / speed * xi[:, 2]
+    rhs[: system.n_density] = -ambient.ravel()
+    free_poles, free_forces = [], []
+    for p in np.flatnonzero(~fixed):
+        loads = np.concatenate([forces[p] / force_scale, torques[p] / (force_scale * length)])
+        if np.any(loads):
+            poles, point_forces = system.completion(p, loads)
+            free_poles.append(poles)
+            free_forces.append(point_forces)
+    if free_poles:
+        rhs[: system.n_density] -= double_layer.point_force_velocity(
+            xi, np.concatenate(free_poles), np.concatenate(free_forces)).ravel()
+    for p in np.flatnonzero(fixed):
+        rows = system.ranges[p]
+        rhs[rows] += geometry.rigid_modes(p) @ (prescribed[p] / speed)
+
+    result = gmres(system.linear_operator(), rhs, tolerance=tolerance,
+                   max_iterations=max_iterations, initial_guess=initial_guess)
+    x = result.solution
+
+    velocity = np.zeros((len(bodies), 3))
+    angular_velocity = np.zeros((len(bodies), 3))
+    force, torque = forces.copy(), torques.copy()
+    for p, body in enumerate(bodies):
+        if body.fixed:
+            k = system.n_density + 6 * system.fixed_index[p]
+            force[p] = x[k : k + 3] * FORCE_UNIT * force_scale
+            torque[p] = x[k + 3 : k + 6] * TORQUE_UNIT * force_scale * length
+            velocity[p], angular_velocity[p] = body.velocity, body.angular_velocity
+        else:
+            motion = system.rigid_velocity(p, x)
+            velocity[p] = motion[:3] * speed
+            angular_velocity[p] = motion[3:] * speed / length
+    return MobilitySolution(velocity, angular_velocity, force, torque, result.iterations,
+                            result.residual, result.converged, double_layer.mode, x)

@@ -1,0 +1,159 @@
+"""The double-layer operator of the Completed Double Layer method, (1/2 + D) q.
+
+For a density q constant on each element and collocation at the element centres xi_a,
+
+    ((1/2 + D) q)_a = sum_{b in body(a)} I_ab (q_b - q_a) + sum_{b not in body(a)} I_ab q_b,
+
+with I_ab = int_{E_b} Sigma(x, xi_a) . n(x) dS(x) (``kernels/greens.py``). The first sum is the
+constant-density identity int_S Sigma . n dS = -1/2 on a closed surface (thesis ch. 3.3;
+Phan-Thien & Fan 1996), which holds for the wall kernel too because the image part is regular
+inside the body; it replaces the singular self-element integral, and makes the discrete
+operator annihilate rigid translations exactly.
+
+Applied either as an assembled dense matrix (Warp assembly, NumPy BLAS on CPU, a Warp kernel on
+CUDA) or matrix-free (Warp recomputes the element integrals in every product), chosen by size.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import runtime
+from .geometry import SurfaceGeometry
+
+
+@dataclass(frozen=True)
+class QuadratureOptions:
+    """order: Gauss points per direction on an element (and on each sub-panel);
+    adaptive: subdivide elements near a pole or its wall image (else plain Gauss);
+    near_factor: subdivide while distance < near_factor * panel radius;
+    max_level: deepest quadtree level of the subdivision."""
+
+    order: int = 3
+    adaptive: bool = True
+    near_factor: float = 2.0
+    max_level: int = 10
+
+    def __post_init__(self):
+        if int(self.order) != self.order or not 1 <= self.order <= 10:
+            raise ValueError(f"quadrature order must be an integer in [1, 10], got {self.order!r}")
+        if not np.isfinite(self.near_factor) or self.near_factor <= 0:
+            raise ValueError(f"near_factor must be positive, got {self.near_factor!r}")
+        if int(self.max_level) != self.max_level or not 0 <= self.max_level <= 24:
+            raise ValueError(f"max_level must be an integer in [0, 24], got {self.max_level!r}")
+
+
+OPERATOR_MODES = ("auto", "dense", "matrix_free")
+
+
+class DoubleLayerOperator:
+    def __init__(self, geometry: SurfaceGeometry, wall: bool, quadrature: QuadratureOptions,
+                 dtype: str = "float64", device="cpu", mode: str = "auto",
+                 dense_memory_limit: float = 2.0 * 2**30):
+        if mode not in OPERATOR_MODES:
+            raise ValueError(f"operator mode must be one of {OPERATOR_MODES}, got {mode!r}")
+        from .kernels.assembly import build_kernels  # the top-level kernels/ folder, installed as warpbem.kernels
+
+        self._wp = runtime.init()
+        self.device = runtime.resolve_device(device)
+        self.dtype_name = dtype
+        self.np_dtype = np.float64 if dtype == "float64" else np.float32
+        self.kernels = build_kernels(runtime.dtype_of(dtype), bool(wall))
+        self.geometry = geometry
+        self.quadrature = quadrature
+        self.size = 3 * geometry.n_elements
+        self.device_data = geometry.to_device(dtype, self.device)
+        matrix_bytes = self.size**2 * np.dtype(self.np_dtype).itemsize
+        self.mode = mode if mode != "auto" else ("dense" if matrix_bytes <= dense_memory_limit else "matrix_free")
+        self._matrix = None
+        self._diagonal = None
+
+    # inputs shared by the element-integral kernels, in their argument order
+    def _integral_inputs(self):
+        d = self.device_data
+        q = self.quadrature
+        scalar = self.kernels.green.dtype
+        return [d["nodes"], d["centres"], d["radii"], d["qp_pos"], d["qp_area"], d["n_qp"],
+                d["gauss_x"], d["gauss_w"], scalar(q.near_factor), q.max_level if q.adaptive else 0]
+
+    def assemble(self):
+        """The dense matrix of 1/2 + D (Warp array on the operator's device)."""
+        if self._matrix is not None:
+            return self._matrix
+        wp = self._wp
+        n = self.geometry.n_elements
+        matrix = wp.zeros((self.size, self.size), dtype=self.kernels.green.dtype, device=self.device)
+        poles = self.device_data["poles"]
+        runtime.launch_rows(
+            self.kernels.assemble_dense, n,
+            lambda start, stop: [start, poles, *self._integral_inputs(), matrix[3 * start : 3 * stop]],
+            self.device, extra_dim=n,
+        )
+        host = matrix.numpy() if self.device.is_cpu else matrix.numpy().copy()
+        for start, stop in self.geometry.body_ranges:
+            block = host[3 * start : 3 * stop, 3 * start : 3 * stop].reshape(stop - start, 3, stop - start, 3)
+            row_sums = block.sum(axis=2)  # (a, j, i), the zero self block included
+            idx = np.arange(stop - start)
+            block[idx, :, idx, :] = -row_sums
+            host[3 * start : 3 * stop, 3 * start : 3 * stop] = block.reshape(3 * (stop - start), -1)
+        if not self.device.is_cpu:
+            matrix = wp.array(host, dtype=self.kernels.green.dtype, device=self.device)
+        self._matrix = matrix
+        return matrix
+
+    def _self_blocks(self):
+        """Matrix-free diagonal blocks, -sum over the other elements of the same body."""
+        if self._diagonal is None:
+            wp = self._wp
+            n = self.geometry.n_elements
+            sums = wp.zeros(n, dtype=self.kernels.green.mat33, device=self.device)
+            d = self.device_data
+            runtime.launch_rows(
+                self.kernels.same_body_row_sums, n,
+                lambda start, stop: [start, d["poles"], d["body_start"], d["body_end"],
+                                     *self._integral_inputs(), sums[start:stop]],
+                self.device,
+            )
+            self._diagonal = wp.array(-sums.numpy(), dtype=self.kernels.green.mat33, device=self.device)
+        return self._diagonal
+
+    def matvec(self, density: np.ndarray) -> np.ndarray:
+        """(1/2 + D) q for a host vector q of length 3 E; returns a float64 host vector."""
+        wp = self._wp
+        density = np.asarray(density, dtype=self.np_dtype)
+        if self.mode == "dense":
+            matrix = self.assemble()
+            if self.device.is_cpu:
+                return np.asarray(matrix.numpy() @ density, dtype=np.float64)
+            x = wp.array(density, dtype=self.kernels.green.dtype, device=self.device)
+            out = wp.zeros(self.size, dtype=self.kernels.green.dtype, device=self.device)
+            wp.launch(self.kernels.dense_matvec, dim=self.size, inputs=[matrix, x, out], device=self.device)
+            return out.numpy().astype(np.float64)
+        diagonal = self._self_blocks()
+        n = self.geometry.n_elements
+        vec3 = self.kernels.green.vec3
+        q = wp.array(density.reshape(n, 3), dtype=vec3, device=self.device)
+        out = wp.zeros(n, dtype=vec3, device=self.device)
+        poles = self.device_data["poles"]
+        runtime.launch_rows(
+            self.kernels.apply_matrix_free, n,
+            lambda start, stop: [start, poles, *self._integral_inputs(), diagonal, q, out[start:stop]],
+            self.device,
+        )
+        return out.numpy().reshape(-1).astype(np.float64)
+
+    def point_force_velocity(self, targets: np.ndarray, poles: np.ndarray, forces: np.ndarray) -> np.ndarray:
+        """sum_p G(target, pole_p) force_p at every target (scaled units, viscosity 1)."""
+        wp = self._wp
+        vec3 = self.kernels.green.vec3
+        t = wp.array(np.ascontiguousarray(targets), dtype=vec3, device=self.device)
+        p = wp.array(np.ascontiguousarray(poles), dtype=vec3, device=self.device)
+        f = wp.array(np.ascontiguousarray(forces), dtype=vec3, device=self.device)
+        out = wp.zeros(len(targets), dtype=vec3, device=self.device)
+        runtime.launch_rows(
+            self.kernels.point_force_velocity, len(targets),
+            lambda start, stop: [start, t, p, f, out[start:stop]], self.device,
+        )
+        return out.numpy().astype(np.float64)

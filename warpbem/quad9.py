@@ -1,0 +1,65 @@
+"""Host-side geometry of QUAD9 elements (9-node biquadratic Lagrange quadrilaterals).
+
+Node order on the reference square [-1, 1]^2 (seen from outside the body, counter-clockwise,
+so that x_s x x_t points out of the body):
+
+    3 --- 6 --- 2        corners 0-3, mid-edge nodes 4-7, centre node 8
+    |           |
+    7     8     5        (s, t) of node a: REFERENCE_NODES[a]
+    |           |
+    0 --- 4 --- 1
+
+The device copy of the same map, used by the adaptive quadrature, is ``kernels/elements.py``;
+``tests/unit/test_quad9.py`` checks that the two agree.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+REFERENCE_NODES = np.array(
+    [[-1, -1], [1, -1], [1, 1], [-1, 1], [0, -1], [1, 0], [0, 1], [-1, 0], [0, 0]], dtype=float
+)
+
+
+def _lagrange_1d(u):
+    """Quadratic Lagrange basis on the nodes -1, 0, 1 and its derivative; shapes (..., 3)."""
+    u = np.asarray(u, dtype=float)[..., None]
+    values = np.concatenate([0.5 * u * (u - 1.0), 1.0 - u * u, 0.5 * u * (u + 1.0)], axis=-1)
+    slopes = np.concatenate([u - 0.5, -2.0 * u, u + 0.5], axis=-1)
+    return values, slopes
+
+
+_INDEX_1D = (REFERENCE_NODES + 1).astype(int)  # which 1-D basis function (0, 1, 2) per node
+
+
+def shape_functions(s, t):
+    """Values N_a(s, t) and derivatives dN_a/ds, dN_a/dt, each of shape (..., 9)."""
+    ls, dls = _lagrange_1d(s)
+    lt, dlt = _lagrange_1d(t)
+    i, j = _INDEX_1D[:, 0], _INDEX_1D[:, 1]
+    return ls[..., i] * lt[..., j], dls[..., i] * lt[..., j], ls[..., i] * dlt[..., j]
+
+
+def gauss_legendre_square(order: int):
+    """Tensor Gauss-Legendre rule on [-1, 1]^2: points (order^2, 2) and weights (order^2,)."""
+    if int(order) != order or order < 1:
+        raise ValueError(f"quadrature order must be a positive integer, got {order!r}")
+    x, w = np.polynomial.legendre.leggauss(int(order))
+    s, t = np.meshgrid(x, x, indexing="ij")
+    return np.stack([s.ravel(), t.ravel()], axis=1), np.outer(w, w).ravel()
+
+
+def surface_quadrature(element_nodes: np.ndarray, order: int):
+    """Quadrature points on every element.
+
+    element_nodes: (E, 9, 3). Returns positions (E, Q, 3) and vector area weights (E, Q, 3),
+    the latter equal to w_q (x_s x x_t): the outward normal times the surface Jacobian times
+    the Gauss weight, so that sum_q f(x_q) |a_q| approximates the surface integral of f.
+    """
+    points, weights = gauss_legendre_square(order)
+    n, ns, nt = shape_functions(points[:, 0], points[:, 1])
+    positions = np.einsum("qa,eai->eqi", n, element_nodes)
+    x_s = np.einsum("qa,eai->eqi", ns, element_nodes)
+    x_t = np.einsum("qa,eai->eqi", nt, element_nodes)
+    return positions, np.cross(x_s, x_t) * weights[None, :, None]

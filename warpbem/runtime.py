@@ -1,0 +1,99 @@
+"""Warp start-up, devices and CPU row splitting.
+
+``init()`` points Warp's kernel cache at an ignored project folder (``.warp_cache`` beside
+``pyproject.toml`` in a source checkout, else ``~/.cache/warpbem``; ``WARPBEM_CACHE`` overrides)
+before ``wp.init()``, so tests and CI reuse compiled kernels. Nothing here runs at import.
+
+A Warp launch on the CPU runs on one core but releases the GIL, so ``launch_rows`` splits the
+rows of a kernel into blocks launched from a small thread pool (one block per core); on CUDA it
+launches once.
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+_POOL: ThreadPoolExecutor | None = None
+_INITIALISED = False
+
+
+def cache_dir() -> Path:
+    if os.environ.get("WARPBEM_CACHE"):
+        return Path(os.environ["WARPBEM_CACHE"])
+    root = Path(__file__).resolve().parent.parent
+    if (root / "pyproject.toml").exists():
+        return root / ".warp_cache"
+    return Path.home() / ".cache" / "warpbem"
+
+
+def init():
+    """Import and initialise Warp once; returns the ``warp`` module."""
+    global _INITIALISED
+    import warp as wp
+
+    if not _INITIALISED:
+        wp.config.kernel_cache_dir = str(cache_dir())
+        wp.config.quiet = True
+        wp.init()
+        _INITIALISED = True
+    return wp
+
+
+def dtype_of(name: str):
+    wp = init()
+    types = {"float64": wp.float64, "float32": wp.float32}
+    if name not in types:
+        raise ValueError(f"dtype must be 'float64' or 'float32', got {name!r}")
+    return types[name]
+
+
+def resolve_device(device):
+    wp = init()
+    try:
+        return wp.get_device(device)
+    except (RuntimeError, ValueError) as err:
+        names = [d.alias for d in wp.get_devices()]
+        raise ValueError(f"device {device!r} is not available; this machine has {names}") from err
+
+
+def cpu_threads() -> int:
+    return max(1, min(len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1, 8))
+
+
+def row_blocks(n_rows: int, device) -> list[tuple[int, int]]:
+    """Row ranges to launch: one per CPU thread, or one on a GPU."""
+    n_blocks = cpu_threads() if device.is_cpu else 1
+    edges = np.linspace(0, n_rows, min(n_blocks, max(n_rows, 1)) + 1).astype(int)
+    return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+
+def launch_rows(kernel, n_rows: int, make_inputs, device, extra_dim: int | None = None):
+    """Launch ``kernel`` over ``n_rows`` rows split in blocks.
+
+    ``make_inputs(start, stop)`` returns the input list of one block (its first entry is the
+    row offset ``start``); blocks run concurrently on CPU threads. ``extra_dim`` makes the
+    launch two-dimensional (rows x extra_dim).
+    """
+    wp = init()
+    blocks = row_blocks(n_rows, device)
+
+    def run(block):
+        start, stop = block
+        dim = (stop - start, extra_dim) if extra_dim is not None else stop - start
+        wp.launch(kernel, dim=dim, inputs=make_inputs(start, stop), device=device)
+
+    # compile/load before the threads start, so they never race on the module
+    wp.load_module(kernel.module, device=device)
+    if len(blocks) == 1:
+        run(blocks[0])
+    else:
+        global _POOL
+        if _POOL is None:
+            _POOL = ThreadPoolExecutor(max_workers=cpu_threads(), thread_name_prefix="warpbem")
+        list(_POOL.map(run, blocks))
+    if not device.is_cpu:
+        wp.synchronize_device(device)
