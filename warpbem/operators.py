@@ -33,7 +33,7 @@ class QuadratureOptions:
 
     order: int = 3
     adaptive: bool = True
-    near_factor: float = 2.0
+    near_factor: float = 3.0
     max_level: int = 10
 
     def __post_init__(self):

@@ -48,7 +48,8 @@ def signed_distance(points: np.ndarray, element_nodes: np.ndarray, order: int = 
         n, ns, nt = quad9.shape_functions(st[:, 0], st[:, 1])
         x = np.einsum("pa,pai->pi", n, nodes)
         jac = np.stack([np.einsum("pa,pai->pi", ns, nodes), np.einsum("pa,pai->pi", nt, nodes)], axis=-1)
-        step = np.linalg.solve(np.einsum("pik,pil->pkl", jac, jac), np.einsum("pik,pi->pk", jac, points - x))
+        normal_matrix = np.einsum("pik,pil->pkl", jac, jac)
+        step = np.linalg.solve(normal_matrix, np.einsum("pik,pi->pk", jac, points - x)[..., None])[..., 0]
         st = np.clip(st + step, -1.0, 1.0)
     n, ns, nt = quad9.shape_functions(st[:, 0], st[:, 1])
     x = np.einsum("pa,pai->pi", n, nodes)

@@ -33,11 +33,14 @@ def cache_dir() -> Path:
 def init():
     """Import and initialise Warp once; returns the ``warp`` module."""
     global _INITIALISED
+    import logging
+
     import warp as wp
 
     if not _INITIALISED:
         wp.config.kernel_cache_dir = str(cache_dir())
-        wp.config.quiet = True
+        wp.config.log_level = logging.WARNING  # no start-up banner or per-module load lines
+        wp.config.enable_backward = False  # no adjoint code: half the compile time
         wp.init()
         _INITIALISED = True
     return wp
