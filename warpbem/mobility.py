@@ -181,7 +181,7 @@ def solve_mobility(
     dtype: str = "float64",
     operator: str = "auto",
     initial_guess=None,
-    contact_refinement: float = 1.0,
+    contact_refinement: float = 3.0,
 ) -> MobilitySolution:
     """Rigid velocities of free bodies and holding loads of fixed ones (SI units).
 

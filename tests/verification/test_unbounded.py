@@ -1,0 +1,44 @@
+"""Unbounded Stokes flow: sphere and oblate spheroid resistances, rigid motion in shear.
+Reference values: ../shared/reference/validation.md (Stokes; Oberbeck / Kim & Karrila 1991
+ch. 3, closed forms for spheroids)."""
+
+import numpy as np
+import pytest
+
+import warpbem as wb
+
+from .conftest import grand_resistance, resistance
+
+
+@pytest.mark.parametrize("k, tol", [(4, 2e-3), (8, 5e-4)])
+def test_sphere_stokes_drag_and_torque(sphere_mesh, k, tol):
+    # F = -6 pi mu a U, T = -8 pi mu a^3 Omega (hydrodynamic); the holding load is minus that
+    f, _ = resistance(sphere_mesh(k), (0, 0, 0), np.array([0.3, -1.0, 0.5, 0, 0, 0]), wall=False)
+    np.testing.assert_allclose(f, 6 * np.pi * np.array([0.3, -1.0, 0.5]), rtol=tol)
+    _, t = resistance(sphere_mesh(k), (0, 0, 0), np.array([0, 0, 0, 0.2, 1.0, -0.7]), wall=False)
+    np.testing.assert_allclose(t, 8 * np.pi * np.array([0.2, 1.0, -0.7]), rtol=tol)
+
+
+def test_free_sphere_in_shear_moves_with_the_fluid_exactly(sphere_mesh):
+    """A torque- and force-free sphere in unbounded simple shear u = gdot z e_x translates with
+    the fluid at its centre and spins at gdot/2 (Jeffery 1922). The translation is the rigid
+    part of the ambient flow, which the deflated CDL operator reproduces to GMRES tolerance."""
+    body = wb.Body(sphere_mesh(4), position=(1.0, -2.0, 3.0))
+    sol = wb.solve_mobility([body], shear_rate=2.0, viscosity=1.0, wall=False, tolerance=1e-12)
+    np.testing.assert_allclose(sol.velocity[0], [6.0, 0.0, 0.0], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(sol.angular_velocity[0], [0.0, 1.0, 0.0], rtol=0, atol=5e-4)
+
+
+OBLATE_HALF = dict(XA=0.905305, YA=0.792707, XC=0.705020, YC=0.565816)  # c/a = 0.5
+
+
+@pytest.mark.parametrize("k, tol", [(4, 1e-2), (8, 5e-3)])
+def test_oblate_spheroid_resistance(k, tol):
+    """Oblate spheroid c/a = 0.5 (validation.md): F = -6 pi mu a (X^A or Y^A) U,
+    T = -8 pi mu a^3 (X^C or Y^C) Omega, along / perpendicular to the symmetry axis z.
+    The 6x6 grand resistance matrix is also symmetric (Lorentz reciprocity)."""
+    r = grand_resistance(wb.mesh.spheroid(1.0, 0.5, subdivisions=k), (0, 0, 0), wall=False)
+    expected = np.diag([6 * np.pi * OBLATE_HALF["YA"]] * 2 + [6 * np.pi * OBLATE_HALF["XA"]]
+                       + [8 * np.pi * OBLATE_HALF["YC"]] * 2 + [8 * np.pi * OBLATE_HALF["XC"]])
+    np.testing.assert_allclose(np.diag(r), np.diag(expected), rtol=tol)
+    assert np.abs(r - np.diag(np.diag(r))).max() < 1e-3 * np.abs(r).max()
