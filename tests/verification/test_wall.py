@@ -94,10 +94,11 @@ def test_grand_resistance_matrix_is_symmetric_positive_definite():
 
 
 def test_convergence_order_under_refinement(sphere_mesh):
-    """Errors against Brenner (1961) and GCB (1967b) at h/a = 1.5 on k = 2, 4, 8 (no contact
-    refinement): the observed order of convergence in the element size is about 2."""
+    """Errors against Brenner (1961) and GCB (1967b) at h/a = 1.5 on k = 4, 8, 16 (no contact
+    refinement): the observed order of convergence in the element size is about 2 (k = 2 is
+    too coarse for the asymptotic regime: its Brenner error cancels by chance)."""
     errors = {"brenner": [], "shear": []}
-    for k in (2, 4, 8):
+    for k in (4, 8, 16):
         f, _ = resistance(sphere_mesh(k), (0, 0, 1.5), np.array([0, 0, 1.0, 0, 0, 0]), contact_refinement=0.0)
         errors["brenner"].append(abs(f[2] / (6 * np.pi * BRENNER[1.5]) - 1))
         body = wb.Body(sphere_mesh(k), position=(0, 0, 1.5))
@@ -105,4 +106,5 @@ def test_convergence_order_under_refinement(sphere_mesh):
         errors["shear"].append(abs(sol.velocity[0, 0] / 1.5 / GCB_B[1.5]["U"] - 1))
     for name, err in errors.items():
         orders = np.log2(np.array(err[:-1]) / np.array(err[1:]))
+        print(name, "errors", err, "orders", orders)
         assert orders.min() > 1.5, (name, err, orders)
