@@ -34,8 +34,11 @@ def gmres(operator: spla.LinearOperator, rhs: np.ndarray, tolerance: float = 1e-
         nonlocal iterations
         iterations += 1
 
+    if int(max_iterations) != max_iterations or max_iterations < 1:
+        raise ValueError(f"max_iterations must be a positive integer, got {max_iterations!r}")
+    restart = min(restart, int(max_iterations))
     x, info = spla.gmres(operator, rhs, x0=initial_guess, rtol=tolerance, atol=0.0,
-                         restart=restart, maxiter=max(1, max_iterations // restart),
+                         restart=restart, maxiter=-(-int(max_iterations) // restart),
                          callback=count, callback_type="pr_norm")
     residual = float(np.linalg.norm(rhs - operator.matvec(x)) / rhs_norm)
     if info != 0 or not np.all(np.isfinite(x)) or residual > 10 * tolerance:

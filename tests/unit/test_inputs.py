@@ -1,0 +1,78 @@
+"""Bad input stops with a message naming the body and the problem, never a NaN result."""
+
+import numpy as np
+import pytest
+
+import warpbem as wb
+
+SPHERE = wb.mesh.sphere(1.0, 2)
+
+
+def test_body_rejects_bad_values():
+    with pytest.raises(ValueError, match="position must be finite"):
+        wb.Body(SPHERE, position=(0.0, np.nan, 2.0))
+    with pytest.raises(ValueError, match="position must have 3 components"):
+        wb.Body(SPHERE, position=(0.0, 2.0))
+    with pytest.raises(ValueError, match="orientation quaternion must be non-zero"):
+        wb.Body(SPHERE, orientation=(0, 0, 0, 0))
+    with pytest.raises(TypeError, match="mesh must be"):
+        wb.Body("sphere.q9")
+    with pytest.raises(ValueError, match="needs fixed=True"):
+        wb.Body(SPHERE, velocity=(1.0, 0, 0))
+
+
+def test_wall_crossing_names_the_body():
+    bodies = [wb.Body(SPHERE, position=(0, 0, 3.0)), wb.Body(SPHERE, position=(5, 0, 0.9))]
+    with pytest.raises(wb.PlacementError, match=r"body 1 touches or crosses the wall"):
+        wb.solve_mobility(bodies, shear_rate=1.0)
+    # without the wall the same placement is fine
+    sol = wb.solve_mobility(bodies, shear_rate=1.0, wall=False)
+    assert np.all(np.isfinite(sol.velocity))
+
+
+def test_overlap_names_both_bodies_even_when_barely_touching():
+    bodies = [wb.Body(SPHERE, position=(0, 0, 2.0)), wb.Body(SPHERE, position=(1.999, 0, 2.0))]
+    with pytest.raises(wb.PlacementError, match="bodies 0 and 1 overlap"):
+        wb.solve_mobility(bodies)
+    # a gap of 1e-3 radii is a valid (if demanding) configuration
+    bodies[1] = wb.Body(SPHERE, position=(2.001, 0, 2.0))
+    wb.solve_mobility(bodies, wall=False, forces=[[0, 0, 1.0], [0, 0, 0]])
+
+
+def test_reference_point_must_be_inside_the_mesh():
+    shifted = wb.mesh.Mesh(SPHERE.nodes + [3.0, 0, 0], SPHERE.elements)
+    with pytest.raises(wb.PlacementError, match="body 0: its reference point"):
+        wb.solve_mobility([wb.Body(shifted, position=(0, 0, 10.0))])
+
+
+@pytest.mark.parametrize("kwargs, error, message", [
+    (dict(forces=np.zeros((2, 3))), ValueError, r"forces must have shape \(1, 3\)"),
+    (dict(torques=[[0, np.inf, 0]]), ValueError, r"torques\[0\] \(body 0\) is not finite"),
+    (dict(viscosity=0.0), ValueError, "viscosity must be a positive"),
+    (dict(shear_rate=np.nan), ValueError, "shear_rate must be a finite"),
+    (dict(dtype="float16"), ValueError, "dtype must be"),
+    (dict(operator="sparse"), ValueError, "operator mode must be"),
+    (dict(device="cuda:7"), ValueError, "device 'cuda:7' is not available"),
+    (dict(quadrature_order=0), ValueError, "quadrature order"),
+    (dict(tolerance=2.0), ValueError, "tolerance"),
+])
+def test_solver_arguments_are_checked(kwargs, error, message):
+    with pytest.raises(error, match=message):
+        wb.solve_mobility([wb.Body(SPHERE, position=(0, 0, 3.0))], **{"shear_rate": 1.0, **kwargs})
+
+
+def test_loads_on_fixed_bodies_are_refused():
+    bodies = [wb.Body(SPHERE, position=(0, 0, 3.0), fixed=True)]
+    with pytest.raises(ValueError, match="body 0 is fixed"):
+        wb.solve_mobility(bodies, forces=[[1.0, 0, 0]])
+
+
+def test_gmres_failure_reports_iterations_and_residual():
+    bodies = [wb.Body(SPHERE, position=(0, 0, 1.3)), wb.Body(SPHERE, position=(2.2, 0, 1.3), fixed=True)]
+    with pytest.raises(wb.ConvergenceError, match=r"\d+ iterations, relative residual \d"):
+        wb.solve_mobility(bodies, shear_rate=1.0, tolerance=1e-14, max_iterations=3)
+
+
+def test_empty_scene_is_refused():
+    with pytest.raises(ValueError, match="at least one Body"):
+        wb.solve_mobility([])
