@@ -1,0 +1,46 @@
+"""Command line: ``warpbem demo`` runs the default scene, ``warpbem plot`` charts a result."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="warpbem", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    demo = sub.add_parser("demo", help="free cell passing an adherent cell: velocities and loads (HDF5 + PNG)")
+    demo.add_argument("--output", default="results/demo.h5", help="HDF5 file to write (default %(default)s)")
+    demo.add_argument("--device", default="cpu", help="Warp device, e.g. cpu or cuda:0 (default %(default)s)")
+    demo.add_argument("--positions", type=int, default=25, help="streamwise positions (default %(default)s)")
+    demo.add_argument("--no-plot", action="store_true", help="skip the PNG chart")
+    plot = sub.add_parser("plot", help="write the PNG chart of a demo HDF5 file")
+    plot.add_argument("result", help="HDF5 file written by warpbem demo")
+    plot.add_argument("--png", default=None, help="output PNG (default: beside the HDF5 file)")
+    args = parser.parse_args(argv)
+
+    from . import plotting
+
+    if args.command == "demo":
+        from .demo import DemoScene, run
+
+        if args.positions < 1:
+            parser.error("--positions must be at least 1")
+        output = Path(args.output)
+        print(f"warpbem demo -> {output} (device {args.device})", flush=True)
+        try:
+            run(output, device=args.device, scene=DemoScene(positions=args.positions),
+                progress=lambda line: print(line, flush=True))
+        except KeyboardInterrupt:
+            print(f"interrupted: the rows computed so far are in {output}", file=sys.stderr)
+            return 130
+        if not args.no_plot:
+            print(f"chart: {plotting.plot_demo(output)}")
+        return 0
+    print(f"chart: {plotting.plot_demo(args.result, args.png)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -236,6 +236,9 @@ def solve_mobility(
         rows = system.ranges[p]
         rhs[rows] += geometry.rigid_modes(p) @ (prescribed[p] / speed)
 
+    if initial_guess is not None and np.shape(initial_guess) != (system.size,):
+        raise ValueError(f"initial_guess must have shape ({system.size},) for this scene, got"
+                         f" {np.shape(initial_guess)} (the mesh or the bodies changed)")
     result = gmres(system.linear_operator(), rhs, tolerance=tolerance,
                    max_iterations=max_iterations, initial_guess=initial_guess)
     x = result.solution
