@@ -22,7 +22,7 @@ def winding_number(points: np.ndarray, element_nodes: np.ndarray, order: int = 4
     for start in range(0, len(points), 256):
         d = x[None, :, :] - points[start : start + 256, None, :]
         r3 = np.linalg.norm(d, axis=-1) ** 3
-        out[start : start + 256] = np.einsum("pqi,qi->pq", d, a).__truediv__(r3).sum(axis=1)
+        out[start : start + 256] = (np.einsum("pqi,qi->pq", d, a) / r3).sum(axis=1)
     return out / (4.0 * np.pi)
 
 
