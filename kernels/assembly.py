@@ -25,6 +25,12 @@ import warp as wp
 
 from .greens import make_green_functions
 
+# (s, t) index (0, 1, 2 for -1, 0, 1) of each QUAD9 node, in the order of
+# warpbem.quad9.REFERENCE_NODES: corners 0-3 counter-clockwise, mid-edges 4-7, centre 8
+_NODE_INDEX = wp.types.vector(9, wp.int32)
+NODE_S = wp.constant(_NODE_INDEX(0, 2, 2, 0, 1, 2, 1, 0, 1))
+NODE_T = wp.constant(_NODE_INDEX(0, 0, 2, 2, 0, 1, 2, 1, 1))
+
 
 @functools.lru_cache(maxsize=None)
 def build_kernels(dtype, wall: bool) -> SimpleNamespace:
@@ -52,23 +58,6 @@ def build_kernels(dtype, wall: bool) -> SimpleNamespace:
         return u + half
 
     @wp.func
-    def node_offset_s(a: int):
-        # s-index (0, 1, 2) of QUAD9 node a, order of warpbem.quad9.REFERENCE_NODES
-        if a == 0 or a == 3 or a == 7:
-            return 0
-        if a == 4 or a == 6 or a == 8:
-            return 1
-        return 2
-
-    @wp.func
-    def node_offset_t(a: int):
-        if a == 0 or a == 1 or a == 4:
-            return 0
-        if a == 5 or a == 7 or a == 8:
-            return 1
-        return 2
-
-    @wp.func
     def quad9_point(nodes: wp.array(dtype=vec3), element: int, s: dtype, t: dtype):
         """Position and x_s x x_t (outward normal times Jacobian) at (s, t) of an element."""
         x = vec3()
@@ -76,14 +65,32 @@ def build_kernels(dtype, wall: bool) -> SimpleNamespace:
         xt = vec3()
         for a in range(9):
             p = nodes[element * 9 + a]
-            i = node_offset_s(a)
-            j = node_offset_t(a)
+            i = NODE_S[a]
+            j = NODE_T[a]
             ls = lagrange(s, i)
             lt = lagrange(t, j)
             x += p * (ls * lt)
             xs += p * (lagrange_slope(s, i) * lt)
             xt += p * (ls * lagrange_slope(t, j))
         return x, wp.cross(xs, xt)
+
+    @wp.struct
+    class Surface:
+        """Element data of all bodies (see warpbem/geometry.py) and the quadrature settings."""
+
+        poles: wp.array(dtype=vec3)  # collocation points, one per element
+        nodes: wp.array(dtype=vec3)  # 9 per element
+        centres: wp.array(dtype=vec3)
+        radii: wp.array(dtype=dtype)  # largest node distance from the centre node
+        qp_pos: wp.array(dtype=vec3)  # regular Gauss points, n_qp per element
+        qp_area: wp.array(dtype=vec3)  # outward normal * Jacobian * weight
+        n_qp: int
+        gauss_x: wp.array(dtype=dtype)  # 1-D Gauss rule on [-1, 1] for the sub-panels
+        gauss_w: wp.array(dtype=dtype)
+        near_factor: dtype
+        max_level: int  # 0: no subdivision
+        body_start: wp.array(dtype=int)  # element range of each element's own body
+        body_end: wp.array(dtype=int)
 
     @wp.func
     def distance_to_pole(c: vec3, pole: vec3):
@@ -93,51 +100,39 @@ def build_kernels(dtype, wall: bool) -> SimpleNamespace:
         return d
 
     @wp.func
-    def panel_needs_split(
-        nodes: wp.array(dtype=vec3), element: int, s0: dtype, t0: dtype, h: dtype,
-        pole: vec3, near_factor: dtype,
-    ):
+    def panel_needs_split(surf: Surface, element: int, s0: dtype, t0: dtype, h: dtype, pole: vec3):
         half = dtype(0.5)
-        c, unused = quad9_point(nodes, element, s0 + half * h, t0 + half * h)
+        c, unused = quad9_point(surf.nodes, element, s0 + half * h, t0 + half * h)
         radius = dtype(0.0)
         for corner in range(4):
             cs = s0 + h * dtype(corner % 2)
             ct = t0 + h * dtype(corner // 2)
-            p, unused2 = quad9_point(nodes, element, cs, ct)
+            p, unused2 = quad9_point(surf.nodes, element, cs, ct)
             radius = wp.max(radius, wp.length(p - c))
-        return distance_to_pole(c, pole) < near_factor * radius
+        return distance_to_pole(c, pole) < surf.near_factor * radius
 
     @wp.func
-    def panel_integral(
-        nodes: wp.array(dtype=vec3), element: int, s0: dtype, t0: dtype, h: dtype,
-        gauss_x: wp.array(dtype=dtype), gauss_w: wp.array(dtype=dtype), pole: vec3,
-    ):
+    def panel_integral(surf: Surface, element: int, s0: dtype, t0: dtype, h: dtype, pole: vec3):
         half_h = dtype(0.5) * h
         acc = mat33()
-        n_gauss = gauss_x.shape[0]
+        n_gauss = surf.gauss_x.shape[0]
         for i in range(n_gauss):
-            s = s0 + half_h * (gauss_x[i] + dtype(1.0))
+            s = s0 + half_h * (surf.gauss_x[i] + dtype(1.0))
             for j in range(n_gauss):
-                t = t0 + half_h * (gauss_x[j] + dtype(1.0))
-                x, area_vector = quad9_point(nodes, element, s, t)
-                weighted = area_vector * (gauss_w[i] * gauss_w[j] * half_h * half_h)
+                t = t0 + half_h * (surf.gauss_x[j] + dtype(1.0))
+                x, area_vector = quad9_point(surf.nodes, element, s, t)
+                weighted = area_vector * (surf.gauss_w[i] * surf.gauss_w[j] * half_h * half_h)
                 acc += g.double_layer(x, weighted, pole)
         return acc
 
     @wp.func
-    def element_integral(
-        pole: vec3, element: int,
-        nodes: wp.array(dtype=vec3), centres: wp.array(dtype=vec3), radii: wp.array(dtype=dtype),
-        qp_pos: wp.array(dtype=vec3), qp_area: wp.array(dtype=vec3), n_qp: int,
-        gauss_x: wp.array(dtype=dtype), gauss_w: wp.array(dtype=dtype),
-        near_factor: dtype, max_level: int,
-    ):
+    def element_integral(surf: Surface, pole: vec3, element: int):
         """Double-layer integral of one element at one pole (see the module docstring)."""
         acc = mat33()
-        if max_level == 0 or distance_to_pole(centres[element], pole) >= near_factor * radii[element]:
-            for q in range(n_qp):
-                k = element * n_qp + q
-                acc += g.double_layer(qp_pos[k], qp_area[k], pole)
+        if surf.max_level == 0 or distance_to_pole(surf.centres[element], pole) >= surf.near_factor * surf.radii[element]:
+            for q in range(surf.n_qp):
+                k = element * surf.n_qp + q
+                acc += g.double_layer(surf.qp_pos[k], surf.qp_area[k], pole)
             return acc
         # stackless depth-first walk of the quadtree; children in order (0,0) (1,0) (0,1) (1,1)
         level = int(0)
@@ -147,12 +142,12 @@ def build_kernels(dtype, wall: bool) -> SimpleNamespace:
             h = dtype(2.0) / dtype(1 << level)
             s0 = dtype(-1.0) + h * dtype(ix)
             t0 = dtype(-1.0) + h * dtype(iy)
-            if level < max_level and panel_needs_split(nodes, element, s0, t0, h, pole, near_factor):
+            if level < surf.max_level and panel_needs_split(surf, element, s0, t0, h, pole):
                 level += 1
                 ix = 2 * ix
                 iy = 2 * iy
                 continue
-            acc += panel_integral(nodes, element, s0, t0, h, gauss_x, gauss_w, pole)
+            acc += panel_integral(surf, element, s0, t0, h, pole)
             while level > 0 and (ix & 1) == 1 and (iy & 1) == 1:
                 level -= 1
                 ix = ix >> 1
@@ -167,65 +162,38 @@ def build_kernels(dtype, wall: bool) -> SimpleNamespace:
         return acc
 
     @wp.kernel(enable_backward=False, module="unique")
-    def assemble_dense(
-        row_offset: int,
-        poles: wp.array(dtype=vec3),
-        nodes: wp.array(dtype=vec3), centres: wp.array(dtype=vec3), radii: wp.array(dtype=dtype),
-        qp_pos: wp.array(dtype=vec3), qp_area: wp.array(dtype=vec3), n_qp: int,
-        gauss_x: wp.array(dtype=dtype), gauss_w: wp.array(dtype=dtype),
-        near_factor: dtype, max_level: int,
-        matrix: wp.array2d(dtype=dtype),
-    ):
+    def assemble_dense(row_offset: int, surf: Surface, matrix: wp.array2d(dtype=dtype)):
         """matrix[3a + j, 3b + i] = (I_ab)_ji for a in this row block, all b (zero if a == b)."""
         ia, b = wp.tid()
         a = row_offset + ia
         m = mat33()
         if a != b:
-            m = element_integral(poles[a], b, nodes, centres, radii, qp_pos, qp_area, n_qp,
-                                 gauss_x, gauss_w, near_factor, max_level)
+            m = element_integral(surf, surf.poles[a], b)
         for j in range(3):
             for i in range(3):
                 matrix[3 * ia + j, 3 * b + i] = m[j, i]
 
     @wp.kernel(enable_backward=False, module="unique")
-    def apply_matrix_free(
-        row_offset: int,
-        poles: wp.array(dtype=vec3),
-        nodes: wp.array(dtype=vec3), centres: wp.array(dtype=vec3), radii: wp.array(dtype=dtype),
-        qp_pos: wp.array(dtype=vec3), qp_area: wp.array(dtype=vec3), n_qp: int,
-        gauss_x: wp.array(dtype=dtype), gauss_w: wp.array(dtype=dtype),
-        near_factor: dtype, max_level: int,
-        diagonal: wp.array(dtype=mat33), density: wp.array(dtype=vec3),
-        out: wp.array(dtype=vec3),
-    ):
+    def apply_matrix_free(row_offset: int, surf: Surface, diagonal: wp.array(dtype=mat33),
+                          density: wp.array(dtype=vec3), out: wp.array(dtype=vec3)):
         """out[a] = sum_{b != a} I_ab density[b] + diagonal[a] density[a] (rows of this block)."""
         ia = wp.tid()
         a = row_offset + ia
         acc = diagonal[a] * density[a]
-        for b in range(poles.shape[0]):
+        for b in range(surf.poles.shape[0]):
             if b != a:
-                acc += element_integral(poles[a], b, nodes, centres, radii, qp_pos, qp_area,
-                                        n_qp, gauss_x, gauss_w, near_factor, max_level) * density[b]
+                acc += element_integral(surf, surf.poles[a], b) * density[b]
         out[ia] = acc
 
     @wp.kernel(enable_backward=False, module="unique")
-    def same_body_row_sums(
-        row_offset: int,
-        poles: wp.array(dtype=vec3), body_start: wp.array(dtype=int), body_end: wp.array(dtype=int),
-        nodes: wp.array(dtype=vec3), centres: wp.array(dtype=vec3), radii: wp.array(dtype=dtype),
-        qp_pos: wp.array(dtype=vec3), qp_area: wp.array(dtype=vec3), n_qp: int,
-        gauss_x: wp.array(dtype=dtype), gauss_w: wp.array(dtype=dtype),
-        near_factor: dtype, max_level: int,
-        out: wp.array(dtype=mat33),
-    ):
+    def same_body_row_sums(row_offset: int, surf: Surface, out: wp.array(dtype=mat33)):
         """out[a] = sum over the other elements b of a's own body of I_ab."""
         ia = wp.tid()
         a = row_offset + ia
         acc = mat33()
-        for b in range(body_start[a], body_end[a]):
+        for b in range(surf.body_start[a], surf.body_end[a]):
             if b != a:
-                acc += element_integral(poles[a], b, nodes, centres, radii, qp_pos, qp_area,
-                                        n_qp, gauss_x, gauss_w, near_factor, max_level)
+                acc += element_integral(surf, surf.poles[a], b)
         out[ia] = acc
 
     @wp.kernel(enable_backward=False, module="unique")
@@ -253,6 +221,7 @@ def build_kernels(dtype, wall: bool) -> SimpleNamespace:
 
     return SimpleNamespace(
         green=g,
+        Surface=Surface,
         dense_matvec=dense_matvec,
         assemble_dense=assemble_dense,
         apply_matrix_free=apply_matrix_free,

@@ -37,6 +37,12 @@ def make_green_functions(dtype, wall: bool) -> SimpleNamespace:
     mat33 = wp.types.matrix((3, 3), dtype)
 
     @wp.func
+    def image_offset(x: vec3, pole: vec3):
+        # R = x - X*, X* = (X1, X2, -X3) the mirror image of the pole in the wall, and 1/|R|
+        big_r = vec3(x[0] - pole[0], x[1] - pole[1], x[2] + pole[2])
+        return big_r, dtype(1.0) / wp.length(big_r)
+
+    @wp.func
     def stokeslet(x: vec3, n: vec3, pole: vec3):
         zero = dtype(0.0)
         one = dtype(1.0)
@@ -46,8 +52,7 @@ def make_green_functions(dtype, wall: bool) -> SimpleNamespace:
         if wall:
             e3 = vec3(zero, zero, one)
             h = pole[2]
-            big_r = vec3(r[0], r[1], x[2] + h)
-            inv_rr = one / wp.length(big_r)
+            big_r, inv_rr = image_offset(x, pole)
             inv_rr2 = inv_rr * inv_rr
             g -= (wp.identity(3, dtype) + wp.outer(big_r, big_r) * inv_rr2) * inv_rr
             # G^E (appendix A): w_j = R_j - 2 delta_j3 R_3
@@ -77,8 +82,7 @@ def make_green_functions(dtype, wall: bool) -> SimpleNamespace:
         if wall:
             e3 = vec3(zero, zero, one)
             h = pole[2]
-            big_r = vec3(r[0], r[1], x[2] + h)
-            inv_rr = one / wp.length(big_r)
+            big_r, inv_rr = image_offset(x, pole)
             inv_rr2 = inv_rr * inv_rr
             rn = wp.dot(big_r, n)
             m += wp.outer(big_r, big_r) * (rn * inv_rr2 * inv_rr2 * inv_rr)

@@ -70,30 +70,31 @@ class SurfaceGeometry:
             modes[:, :, 3 + axis] = np.cross(np.eye(3)[axis], rho)
         return modes.reshape(3 * n, 6)
 
-    def to_device(self, dtype_name: str, device):
-        """Warp arrays the kernels read (see kernels/assembly.py)."""
+    def to_device(self, kernels, quadrature, device):
+        """The ``Surface`` struct the kernels read (kernels/assembly.py), on ``device``."""
         wp = runtime.init()
-        dtype = runtime.dtype_of(dtype_name)
-        vec3 = wp.types.vector(3, dtype)
-        gauss_x, gauss_w = np.polynomial.legendre.leggauss(self.order)
+        dtype = kernels.green.dtype
 
         def vectors(a):
-            return wp.array(np.ascontiguousarray(a.reshape(-1, 3)), dtype=vec3, device=device)
+            return wp.array(np.ascontiguousarray(a.reshape(-1, 3)), dtype=kernels.green.vec3, device=device)
 
-        def scalars(a):
-            return wp.array(np.ascontiguousarray(a), dtype=dtype, device=device)
+        def scalars(a, kind=dtype):
+            return wp.array(np.ascontiguousarray(a), dtype=kind, device=device)
 
+        gauss_x, gauss_w = np.polynomial.legendre.leggauss(self.order)
         counts = self.body_ranges[:, 1] - self.body_ranges[:, 0]
-        return dict(
-            poles=vectors(self.collocation),
-            nodes=vectors(self.element_nodes),
-            centres=vectors(self.collocation),
-            radii=scalars(self.element_radius),
-            qp_pos=vectors(self.qp_positions),
-            qp_area=vectors(self.qp_area_vectors),
-            n_qp=self.order**2,
-            gauss_x=scalars(gauss_x),
-            gauss_w=scalars(gauss_w),
-            body_start=wp.array(np.repeat(self.body_ranges[:, 0], counts).astype(np.int32), dtype=int, device=device),
-            body_end=wp.array(np.repeat(self.body_ranges[:, 1], counts).astype(np.int32), dtype=int, device=device),
-        )
+        surf = kernels.Surface()
+        surf.poles = vectors(self.collocation)
+        surf.nodes = vectors(self.element_nodes)
+        surf.centres = vectors(self.collocation)
+        surf.radii = scalars(self.element_radius)
+        surf.qp_pos = vectors(self.qp_positions)
+        surf.qp_area = vectors(self.qp_area_vectors)
+        surf.n_qp = self.order**2
+        surf.gauss_x = scalars(gauss_x)
+        surf.gauss_w = scalars(gauss_w)
+        surf.near_factor = dtype(quadrature.near_factor)
+        surf.max_level = quadrature.max_level if quadrature.adaptive else 0
+        surf.body_start = scalars(np.repeat(self.body_ranges[:, 0], counts).astype(np.int32), int)
+        surf.body_end = scalars(np.repeat(self.body_ranges[:, 1], counts).astype(np.int32), int)
+        return surf

@@ -64,19 +64,11 @@ class DoubleLayerOperator:
         self.geometry = geometry
         self.quadrature = quadrature
         self.size = 3 * geometry.n_elements
-        self.device_data = geometry.to_device(dtype, self.device)
+        self.surface = geometry.to_device(self.kernels, quadrature, self.device)
         matrix_bytes = self.size**2 * np.dtype(self.np_dtype).itemsize
         self.mode = mode if mode != "auto" else ("dense" if matrix_bytes <= dense_memory_limit else "matrix_free")
         self._matrix = None
         self._diagonal = None
-
-    # inputs shared by the element-integral kernels, in their argument order
-    def _integral_inputs(self):
-        d = self.device_data
-        q = self.quadrature
-        scalar = self.kernels.green.dtype
-        return [d["nodes"], d["centres"], d["radii"], d["qp_pos"], d["qp_area"], d["n_qp"],
-                d["gauss_x"], d["gauss_w"], scalar(q.near_factor), q.max_level if q.adaptive else 0]
 
     def assemble(self):
         """The dense matrix of 1/2 + D (Warp array on the operator's device)."""
@@ -85,10 +77,9 @@ class DoubleLayerOperator:
         wp = self._wp
         n = self.geometry.n_elements
         matrix = wp.zeros((self.size, self.size), dtype=self.kernels.green.dtype, device=self.device)
-        poles = self.device_data["poles"]
         runtime.launch_rows(
             self.kernels.assemble_dense, n,
-            lambda start, stop: [start, poles, *self._integral_inputs(), matrix[3 * start : 3 * stop]],
+            lambda start, stop: [start, self.surface, matrix[3 * start : 3 * stop]],
             self.device, extra_dim=n,
         )
         host = matrix.numpy() if self.device.is_cpu else matrix.numpy().copy()
@@ -109,11 +100,9 @@ class DoubleLayerOperator:
             wp = self._wp
             n = self.geometry.n_elements
             sums = wp.zeros(n, dtype=self.kernels.green.mat33, device=self.device)
-            d = self.device_data
             runtime.launch_rows(
                 self.kernels.same_body_row_sums, n,
-                lambda start, stop: [start, d["poles"], d["body_start"], d["body_end"],
-                                     *self._integral_inputs(), sums[start:stop]],
+                lambda start, stop: [start, self.surface, sums[start:stop]],
                 self.device,
             )
             self._diagonal = wp.array(-sums.numpy(), dtype=self.kernels.green.mat33, device=self.device)
@@ -136,10 +125,9 @@ class DoubleLayerOperator:
         vec3 = self.kernels.green.vec3
         q = wp.array(density.reshape(n, 3), dtype=vec3, device=self.device)
         out = wp.zeros(n, dtype=vec3, device=self.device)
-        poles = self.device_data["poles"]
         runtime.launch_rows(
             self.kernels.apply_matrix_free, n,
-            lambda start, stop: [start, poles, *self._integral_inputs(), diagonal, q, out[start:stop]],
+            lambda start, stop: [start, self.surface, diagonal, q, out[start:stop]],
             self.device,
         )
         return out.numpy().reshape(-1).astype(np.float64)
