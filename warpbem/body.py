@@ -55,6 +55,7 @@ class Body:
     def __post_init__(self):
         if not isinstance(self.mesh, Mesh):
             raise TypeError(f"mesh must be a warpbem.mesh.Mesh, got {type(self.mesh).__name__}")
+        self.mesh.check()  # closed and outward, else the integral equation has no meaning
         object.__setattr__(self, "position", _vector("position", self.position, 3))
         q = _vector("orientation", self.orientation, 4)
         norm = np.linalg.norm(q)

@@ -86,7 +86,10 @@ class Mesh:
         return float(np.linalg.norm(self.nodes, axis=1).max())
 
     def check(self) -> "Mesh":
-        """Raise MeshError unless the surface is closed, consistently oriented and outward."""
+        """Raise MeshError unless the surface is closed, consistently oriented and outward.
+        Returns the mesh; the result is remembered (a Mesh is immutable)."""
+        if getattr(self, "_checked", False):
+            return self
         corners_mid = self.elements[:, [0, 4, 1, 1, 5, 2, 2, 6, 3, 3, 7, 0]].reshape(-1, 4, 3)
         edges = corners_mid.reshape(-1, 3)
         forward = {(a, b): m for a, m, b in edges}
@@ -102,6 +105,7 @@ class Mesh:
             raise MeshError("an element has zero area")
         if self.volume() <= 0.0:
             raise MeshError("enclosed volume is not positive: the normals point inwards")
+        object.__setattr__(self, "_checked", True)
         return self
 
     def transformed(self, rotation: np.ndarray | None = None, scale=1.0) -> "Mesh":

@@ -11,7 +11,8 @@ inside the body; it replaces the singular self-element integral, and makes the d
 operator annihilate rigid translations exactly.
 
 Applied either as an assembled dense matrix (Warp assembly, NumPy BLAS on CPU, a Warp kernel on
-CUDA) or matrix-free (Warp recomputes the element integrals in every product), chosen by size.
+CUDA) or matrix-free (Warp recomputes the element integrals in every product); ``mode="auto"``
+assembles while the matrix takes at most half the device's free memory.
 """
 
 from __future__ import annotations
@@ -51,7 +52,7 @@ OPERATOR_MODES = ("auto", "dense", "matrix_free")
 class DoubleLayerOperator:
     def __init__(self, geometry: SurfaceGeometry, wall: bool, quadrature: QuadratureOptions,
                  dtype: str = "float64", device="cpu", mode: str = "auto",
-                 dense_memory_limit: float = 2.0 * 2**30):
+                 dense_memory_limit: float | None = None):
         if mode not in OPERATOR_MODES:
             raise ValueError(f"operator mode must be one of {OPERATOR_MODES}, got {mode!r}")
         from .kernels.assembly import build_kernels  # the top-level kernels/ folder, installed as warpbem.kernels
@@ -66,6 +67,8 @@ class DoubleLayerOperator:
         self.size = 3 * geometry.n_elements
         self.surface = geometry.to_device(self.kernels, quadrature, self.device)
         matrix_bytes = self.size**2 * np.dtype(self.np_dtype).itemsize
+        if dense_memory_limit is None:  # "auto": assemble while the matrix fits in half the free memory
+            dense_memory_limit = 0.5 * runtime.free_memory(self.device)
         self.mode = mode if mode != "auto" else ("dense" if matrix_bytes <= dense_memory_limit else "matrix_free")
         self._matrix = None
         self._diagonal = None

@@ -63,6 +63,20 @@ def resolve_device(device):
         raise ValueError(f"device {device!r} is not available; this machine has {names}") from err
 
 
+def free_memory(device) -> int:
+    """Bytes free on ``device``: MemAvailable on the host (Linux), the GPU's free memory on CUDA."""
+    if not device.is_cpu:
+        return int(device.free_memory)
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+
+
 def cpu_threads() -> int:
     return max(1, min(len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1, 8))
 

@@ -76,3 +76,10 @@ def test_gmres_failure_reports_iterations_and_residual():
 def test_empty_scene_is_refused():
     with pytest.raises(ValueError, match="at least one Body"):
         wb.solve_mobility([])
+
+
+def test_body_refuses_an_open_or_inward_mesh():
+    with pytest.raises(wb.MeshError, match="open|shared"):
+        wb.Body(wb.mesh.Mesh(SPHERE.nodes, SPHERE.elements[:-1]))
+    with pytest.raises(wb.MeshError, match="inwards"):
+        wb.Body(wb.mesh.Mesh(SPHERE.nodes, SPHERE.elements[:, [0, 3, 2, 1, 7, 6, 5, 4, 8]]))

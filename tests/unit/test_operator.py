@@ -94,3 +94,13 @@ def test_cdl_spectrum_lies_in_the_right_half_plane():
     eig = np.linalg.eigvals(matrix)
     assert eig.real.min() > 0.05
     assert eig.real.max() < 1.0 + 1e-6
+
+
+def test_auto_mode_assembles_only_what_fits():
+    bodies = two_spheres_near_wall()
+    geometry = SurfaceGeometry.from_bodies(bodies, 3, 1.0, True)
+    auto = DoubleLayerOperator(geometry, True, QuadratureOptions())
+    assert auto.mode == "dense"  # 3 MB here
+    tight = DoubleLayerOperator(geometry, True, QuadratureOptions(), dense_memory_limit=1e6)
+    assert tight.mode == "matrix_free"
+    assert runtime.free_memory(runtime.resolve_device("cpu")) > 1e8
