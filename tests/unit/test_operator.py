@@ -100,7 +100,7 @@ def test_auto_mode_assembles_only_what_fits():
     bodies = two_spheres_near_wall()
     geometry = SurfaceGeometry.from_bodies(bodies, 3, 1.0, True)
     auto = DoubleLayerOperator(geometry, True, QuadratureOptions())
-    assert auto.mode == "dense"  # 3 MB here
-    tight = DoubleLayerOperator(geometry, True, QuadratureOptions(), dense_memory_limit=1e6)
+    assert auto.mode == "dense"  # 0.84 MB here
+    tight = DoubleLayerOperator(geometry, True, QuadratureOptions(), dense_memory_limit=1e5)
     assert tight.mode == "matrix_free"
     assert runtime.free_memory(runtime.resolve_device("cpu")) > 1e8
