@@ -28,6 +28,11 @@ Boundary condition on body p (exterior limit of D is D^PV + q/2):
   thesis's second deflation (of its eigenvalue 2, eq. 2.15-2.16) is not needed for GMRES.
 * Fixed body (prescribed U_p, Omega_p, zero by default): (F_p, T_p) are unknowns, and six
   extra equations <phi_p^l, q> = 0 remove the rigid part of q instead.
+
+Since (1/2 + D^PV) annihilates rigid fields exactly, the discrete operator is applied to the
+non-rigid part q - P q only. The identity already makes this exact for translations; for
+rotations, whose piecewise-constant representation it does not annihilate exactly, it removes
+an O(h^2) error (sphere under torque, 96 elements: 5e-3 -> 1.7e-4).
 """
 
 from __future__ import annotations
