@@ -162,16 +162,31 @@ def build_kernels(dtype, wall: bool) -> SimpleNamespace:
         return acc
 
     @wp.kernel(enable_backward=False, module="unique")
-    def assemble_dense(row_offset: int, surf: Surface, matrix: wp.array2d(dtype=dtype)):
-        """matrix[3a + j, 3b + i] = (I_ab)_ji for a in this row block, all b (zero if a == b)."""
-        ia, b = wp.tid()
-        a = row_offset + ia
+    def assemble_entries(row_offset: int, surf: Surface, rows: wp.array(dtype=int),
+                         cols: wp.array(dtype=int), matrix: wp.array2d(dtype=dtype)):
+        """matrix[3a + j, 3b + i] = (I_ab)_ji for the elements a = rows[..] of this launch and
+        b = cols[..] (zero if a == b; the caller fills self blocks from the identity)."""
+        ir, ic = wp.tid()
+        a = rows[row_offset + ir]
+        b = cols[ic]
         m = mat33()
         if a != b:
             m = element_integral(surf, surf.poles[a], b)
         for j in range(3):
             for i in range(3):
-                matrix[3 * ia + j, 3 * b + i] = m[j, i]
+                matrix[3 * a + j, 3 * b + i] = m[j, i]
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def gather_entries(row_offset: int, src: wp.array2d(dtype=dtype), src_rows: wp.array(dtype=int),
+                       src_cols: wp.array(dtype=int), dst: wp.array2d(dtype=dtype),
+                       dst_rows: wp.array(dtype=int), dst_cols: wp.array(dtype=int)):
+        """Copy the 3x3 blocks of element pairs from an earlier matrix (same pairs, new places):
+        the blocks between bodies that did not move since they were assembled."""
+        ir, ic = wp.tid()
+        r = row_offset + ir
+        for j in range(3):
+            for i in range(3):
+                dst[3 * dst_rows[r] + j, 3 * dst_cols[ic] + i] = src[3 * src_rows[r] + j, 3 * src_cols[ic] + i]
 
     @wp.kernel(enable_backward=False, module="unique")
     def apply_matrix_free(row_offset: int, surf: Surface, diagonal: wp.array(dtype=mat33),
@@ -223,7 +238,8 @@ def build_kernels(dtype, wall: bool) -> SimpleNamespace:
         green=g,
         Surface=Surface,
         dense_matvec=dense_matvec,
-        assemble_dense=assemble_dense,
+        assemble_entries=assemble_entries,
+        gather_entries=gather_entries,
         apply_matrix_free=apply_matrix_free,
         same_body_row_sums=same_body_row_sums,
         point_force_velocity=point_force_velocity,

@@ -55,6 +55,23 @@ class SurfaceGeometry:
             order=order,
         )
 
+    def unchanged_bodies(self, previous: "SurfaceGeometry | None") -> np.ndarray:
+        """Per body: True if its elements are exactly those it had in ``previous`` (same place,
+        same refinement, same scaling), so data computed from them can be kept."""
+        n_bodies = len(self.body_ranges)
+        same = np.zeros(n_bodies, dtype=bool)
+        if previous is None or previous.length_scale != self.length_scale or previous.order != self.order:
+            return same
+        for p in range(min(n_bodies, len(previous.body_ranges))):
+            a0, a1 = previous.body_ranges[p]
+            b0, b1 = self.body_ranges[p]
+            same[p] = a1 - a0 == b1 - b0 and np.array_equal(previous.element_nodes[a0:a1], self.element_nodes[b0:b1])
+        return same
+
+    def elements_of(self, bodies) -> np.ndarray:
+        """Element indices of the given bodies, in order."""
+        return np.concatenate([np.arange(*self.body_ranges[p]) for p in bodies] or [np.zeros(0, int)])
+
     @property
     def n_elements(self) -> int:
         return len(self.collocation)

@@ -72,6 +72,7 @@ class MobilitySolution:
     converged: bool
     operator_mode: str
     solution_vector: np.ndarray  # scaled GMRES unknowns, for a warm start of a similar solve
+    reused_bodies: np.ndarray  # per body: operator blocks kept from the previous solve
 
 
 def _load_array(name, value, bodies):
@@ -99,10 +100,16 @@ def _finite(name, value, positive=False):
     return float(value)
 
 
+def dof_indices(elements: np.ndarray) -> np.ndarray:
+    """Unknown indices 3a, 3a+1, 3a+2 of the given elements."""
+    return (3 * np.asarray(elements)[:, None] + np.arange(3)).ravel()
+
+
 class CompletedDoubleLayer:
     """The discrete CDL system: unknowns [q (3 E), (F, T)/(FORCE_UNIT, TORQUE_UNIT) per fixed body]."""
 
-    def __init__(self, geometry: SurfaceGeometry, operator: DoubleLayerOperator, fixed):
+    def __init__(self, geometry: SurfaceGeometry, operator: DoubleLayerOperator, fixed,
+                 previous: "CompletedDoubleLayer | None" = None):
         self.geometry = geometry
         self.operator = operator
         self.fixed = np.asarray(fixed, dtype=bool)
@@ -118,7 +125,8 @@ class CompletedDoubleLayer:
             # Gram-Schmidt: orthonormal modes phi = raw L^-T, <phi_k, phi_l> = delta_kl
             self.modes.append(scipy.linalg.solve_triangular(factor, raw.T, lower=True).T)
             self.cholesky.append(factor)
-        self.fixed_columns = self._fixed_body_columns()
+        self.unchanged = geometry.unchanged_bodies(previous.geometry if previous else None)
+        self.fixed_columns = self._fixed_body_columns(previous)
 
     def completion(self, body: int, loads: np.ndarray):
         """Poles (7, 3) and point forces (7, 3) of body p's completion for scaled (F, T)."""
@@ -130,15 +138,47 @@ class CompletedDoubleLayer:
         couple = np.cross(loads[3:], e) / (4.0 * d)  # (T x e_l) / (4 d), row l
         return poles, np.concatenate([loads[None, :3], couple, -couple])
 
-    def _fixed_body_columns(self) -> np.ndarray:
-        columns = []
+    def _fixed_body_columns(self, previous) -> np.ndarray:
+        """Velocity at every collocation point of the six unit loads of each fixed body; the
+        rows of bodies that did not move are copied from ``previous`` when the fixed body did
+        not move either."""
+        columns = np.zeros((self.n_density, 6 * int(self.fixed.sum())))
+        all_rows = np.arange(self.geometry.n_elements)
         for p in np.flatnonzero(self.fixed):
-            for k in range(6):
+            k = 6 * self.fixed_index[p]
+            targets = all_rows
+            if previous is not None and self.unchanged[p] and previous.fixed[p]:
+                kept = np.flatnonzero(self.unchanged)
+                old_rows = dof_indices(previous.geometry.elements_of(kept))
+                old_k = 6 * previous.fixed_index[p]
+                columns[dof_indices(self.geometry.elements_of(kept)), k : k + 6] = \
+                    previous.fixed_columns[old_rows, old_k : old_k + 6]
+                targets = self.geometry.elements_of(np.flatnonzero(~self.unchanged))
+            if len(targets) == 0:
+                continue
+            for load in range(6):
                 unit = np.zeros(6)
-                unit[k] = FORCE_UNIT if k < 3 else TORQUE_UNIT
+                unit[load] = FORCE_UNIT if load < 3 else TORQUE_UNIT
                 poles, forces = self.completion(p, unit)
-                columns.append(self.operator.point_force_velocity(self.geometry.collocation, poles, forces).ravel())
-        return np.array(columns).T if columns else np.zeros((self.n_density, 0))
+                velocity = self.operator.point_force_velocity(self.geometry.collocation[targets], poles, forces)
+                columns[dof_indices(targets), k + load] = velocity.ravel()
+        return columns
+
+    def initial_guess(self, previous: "CompletedDoubleLayer", solution: np.ndarray) -> np.ndarray:
+        """Start GMRES from the previous solution, body by body where the element count of a
+        body is unchanged (its density barely changes between nearby configurations)."""
+        x0 = np.zeros(self.size)
+        old = previous.geometry
+        for p, rows in enumerate(self.ranges):
+            if p < len(old.body_ranges):
+                a0, a1 = old.body_ranges[p]
+                if a1 - a0 == rows.stop // 3 - rows.start // 3:
+                    x0[rows] = solution[3 * a0 : 3 * a1]
+                if self.fixed[p] and p < len(previous.fixed) and previous.fixed[p]:
+                    k = self.n_density + 6 * self.fixed_index[p]
+                    k_old = previous.n_density + 6 * previous.fixed_index[p]
+                    x0[k : k + 6] = solution[k_old : k_old + 6]
+        return x0
 
     def rigid_coefficients(self, body: int, density: np.ndarray) -> np.ndarray:
         """<phi_p^l, q> for the six orthonormal modes of body p."""
@@ -170,6 +210,105 @@ class CompletedDoubleLayer:
         return -scipy.linalg.solve_triangular(self.cholesky[body].T, coefficients, lower=False)
 
 
+class MobilitySolver:
+    """The mobility problem for a scene solved again and again (time stepping, parameter
+    sweeps): the settings are fixed here; ``solve`` takes the bodies of the moment.
+
+    Between calls it keeps the operator blocks, and the fixed-body completion columns, of
+    bodies whose elements did not change (fixed adherent cells), and starts GMRES from the
+    previous solution (``reuse=True``). Settings as in ``solve_mobility``.
+    """
+
+    def __init__(self, shear_rate: float = 0.0, viscosity: float = 1e-3, wall: bool = True, device="cpu", *,
+                 quadrature_order: int = 3, adaptive_quadrature: bool = True, tolerance: float = 1e-8,
+                 max_iterations: int = 600, dtype: str = "float64", operator: str = "auto",
+                 contact_refinement: float = 3.0, reuse: bool = True):
+        self.shear_rate = _finite("shear_rate", shear_rate)
+        self.viscosity = _finite("viscosity", viscosity, positive=True)
+        self.wall = bool(wall)
+        self.device = device
+        self.quadrature = QuadratureOptions(order=quadrature_order, adaptive=bool(adaptive_quadrature))
+        self.tolerance = tolerance
+        self.max_iterations = max_iterations
+        self.dtype = dtype
+        self.operator = operator
+        self.contact_refinement = _finite("contact_refinement", contact_refinement)
+        self.reuse = bool(reuse)
+        self._last = None  # (CompletedDoubleLayer, solution vector) of the previous solve
+
+    def solve(self, bodies, forces=None, torques=None, initial_guess=None) -> MobilitySolution:
+        bodies = list(bodies)
+        if not bodies:
+            raise ValueError("bodies must contain at least one Body")
+        for i, b in enumerate(bodies):
+            if not isinstance(b, Body):
+                raise TypeError(f"bodies[{i}] must be a warpbem.Body, got {type(b).__name__}")
+        forces = _load_array("forces", forces, bodies)
+        torques = _load_array("torques", torques, bodies)
+        check_placement(bodies, self.wall)
+
+        length = float(np.mean([b.mesh.equivalent_radius() for b in bodies]))
+        fixed = np.array([b.fixed for b in bodies])
+        prescribed = np.array([np.concatenate([b.velocity, b.angular_velocity * length]) for b in bodies])
+        speed = max(abs(self.shear_rate) * length, np.abs(forces).max() / (self.viscosity * length),
+                    np.abs(torques).max() / (self.viscosity * length**2), np.abs(prescribed).max())
+        speed = speed if speed > 0 else 1.0
+        force_scale = self.viscosity * speed * length  # N per scaled force unit
+
+        previous = self._last[0] if self.reuse and self._last else None
+        geometry = SurfaceGeometry.from_bodies(bodies, self.quadrature.order, length, self.wall,
+                                               self.contact_refinement)
+        double_layer = DoubleLayerOperator(geometry, self.wall, self.quadrature, self.dtype, self.device,
+                                           self.operator, reuse=previous.operator if previous else None)
+        system = CompletedDoubleLayer(geometry, double_layer, fixed, previous)
+
+        rhs = np.zeros(system.size)
+        xi = geometry.collocation
+        ambient = np.zeros_like(xi)
+        ambient[:, 0] = self.shear_rate * length / speed * xi[:, 2]
+        rhs[: system.n_density] = -ambient.ravel()
+        free_poles, free_forces = [], []
+        for p in np.flatnonzero(~fixed):
+            loads = np.concatenate([forces[p] / force_scale, torques[p] / (force_scale * length)])
+            if np.any(loads):
+                poles, point_forces = system.completion(p, loads)
+                free_poles.append(poles)
+                free_forces.append(point_forces)
+        if free_poles:
+            rhs[: system.n_density] -= double_layer.point_force_velocity(
+                xi, np.concatenate(free_poles), np.concatenate(free_forces)).ravel()
+        for p in np.flatnonzero(fixed):
+            rhs[system.ranges[p]] += geometry.rigid_modes(p) @ (prescribed[p] / speed)
+
+        if initial_guess is not None and np.shape(initial_guess) != (system.size,):
+            raise ValueError(f"initial_guess must have shape ({system.size},) for this scene, got"
+                             f" {np.shape(initial_guess)} (the mesh or the bodies changed)")
+        if initial_guess is None and previous is not None:
+            # the previous solution is in the previous scaling: rescale the loads part with it
+            initial_guess = system.initial_guess(previous, self._last[1] * (self._last[2] / speed))
+        result = gmres(system.linear_operator(), rhs, tolerance=self.tolerance,
+                       max_iterations=self.max_iterations, initial_guess=initial_guess)
+        x = result.solution
+        self._last = (system, x, speed)
+
+        velocity = np.zeros((len(bodies), 3))
+        angular_velocity = np.zeros((len(bodies), 3))
+        force, torque = forces.copy(), torques.copy()
+        for p, body in enumerate(bodies):
+            if body.fixed:
+                k = system.n_density + 6 * system.fixed_index[p]
+                force[p] = x[k : k + 3] * FORCE_UNIT * force_scale
+                torque[p] = x[k + 3 : k + 6] * TORQUE_UNIT * force_scale * length
+                velocity[p], angular_velocity[p] = body.velocity, body.angular_velocity
+            else:
+                motion = system.rigid_velocity(p, x)
+                velocity[p] = motion[:3] * speed
+                angular_velocity[p] = motion[3:] * speed / length
+        return MobilitySolution(velocity, angular_velocity, force, torque, result.iterations,
+                                result.residual, result.converged, double_layer.mode, x,
+                                double_layer.reused_bodies)
+
+
 def solve_mobility(
     bodies,
     shear_rate: float = 0.0,
@@ -188,78 +327,19 @@ def solve_mobility(
     initial_guess=None,
     contact_refinement: float = 3.0,
 ) -> MobilitySolution:
-    """Rigid velocities of free bodies and holding loads of fixed ones (SI units).
+    """Rigid velocities of free bodies and holding loads of fixed ones (SI units), one solve.
 
     bodies: list of ``Body``; shear_rate (1/s) of u = shear_rate * z e_x; viscosity (Pa s);
     wall: no-slip plane z = 0 (else unbounded); forces, torques: (n_bodies, 3) external loads
     on free bodies (N, N m), zero rows for fixed ones. quadrature_order: Gauss points per
     direction; adaptive_quadrature: subdivide nearly singular elements; tolerance: GMRES
     relative residual; dtype: "float64" or "float32" kernels; operator: "auto", "dense" or
-    "matrix_free"; initial_guess: a previous solution's ``solution_vector``.
+    "matrix_free"; initial_guess: a previous solution's ``solution_vector``;
+    contact_refinement: split elements nearer than 1/ratio of their radius to the wall or
+    another body (0: never). For repeated solves use ``MobilitySolver``.
     """
-    bodies = list(bodies)
-    if not bodies:
-        raise ValueError("bodies must contain at least one Body")
-    for i, b in enumerate(bodies):
-        if not isinstance(b, Body):
-            raise TypeError(f"bodies[{i}] must be a warpbem.Body, got {type(b).__name__}")
-    shear_rate = _finite("shear_rate", shear_rate)
-    viscosity = _finite("viscosity", viscosity, positive=True)
-    forces = _load_array("forces", forces, bodies)
-    torques = _load_array("torques", torques, bodies)
-    quadrature = QuadratureOptions(order=quadrature_order, adaptive=bool(adaptive_quadrature))
-    check_placement(bodies, bool(wall))
-
-    length = float(np.mean([b.mesh.equivalent_radius() for b in bodies]))
-    fixed = np.array([b.fixed for b in bodies])
-    prescribed = np.array([np.concatenate([b.velocity, b.angular_velocity * length]) for b in bodies])
-    speed = max(abs(shear_rate) * length, np.abs(forces).max() / (viscosity * length),
-                np.abs(torques).max() / (viscosity * length**2), np.abs(prescribed).max())
-    speed = speed if speed > 0 else 1.0
-    force_scale = viscosity * speed * length  # N per scaled force unit
-
-    geometry = SurfaceGeometry.from_bodies(bodies, quadrature.order, length, bool(wall), contact_refinement)
-    double_layer = DoubleLayerOperator(geometry, bool(wall), quadrature, dtype, device, operator)
-    system = CompletedDoubleLayer(geometry, double_layer, fixed)
-
-    rhs = np.zeros(system.size)
-    xi = geometry.collocation
-    ambient = np.zeros_like(xi)
-    ambient[:, 0] = shear_rate * length / speed * xi[:, 2]
-    rhs[: system.n_density] = -ambient.ravel()
-    free_poles, free_forces = [], []
-    for p in np.flatnonzero(~fixed):
-        loads = np.concatenate([forces[p] / force_scale, torques[p] / (force_scale * length)])
-        if np.any(loads):
-            poles, point_forces = system.completion(p, loads)
-            free_poles.append(poles)
-            free_forces.append(point_forces)
-    if free_poles:
-        rhs[: system.n_density] -= double_layer.point_force_velocity(
-            xi, np.concatenate(free_poles), np.concatenate(free_forces)).ravel()
-    for p in np.flatnonzero(fixed):
-        rows = system.ranges[p]
-        rhs[rows] += geometry.rigid_modes(p) @ (prescribed[p] / speed)
-
-    if initial_guess is not None and np.shape(initial_guess) != (system.size,):
-        raise ValueError(f"initial_guess must have shape ({system.size},) for this scene, got"
-                         f" {np.shape(initial_guess)} (the mesh or the bodies changed)")
-    result = gmres(system.linear_operator(), rhs, tolerance=tolerance,
-                   max_iterations=max_iterations, initial_guess=initial_guess)
-    x = result.solution
-
-    velocity = np.zeros((len(bodies), 3))
-    angular_velocity = np.zeros((len(bodies), 3))
-    force, torque = forces.copy(), torques.copy()
-    for p, body in enumerate(bodies):
-        if body.fixed:
-            k = system.n_density + 6 * system.fixed_index[p]
-            force[p] = x[k : k + 3] * FORCE_UNIT * force_scale
-            torque[p] = x[k + 3 : k + 6] * TORQUE_UNIT * force_scale * length
-            velocity[p], angular_velocity[p] = body.velocity, body.angular_velocity
-        else:
-            motion = system.rigid_velocity(p, x)
-            velocity[p] = motion[:3] * speed
-            angular_velocity[p] = motion[3:] * speed / length
-    return MobilitySolution(velocity, angular_velocity, force, torque, result.iterations,
-                            result.residual, result.converged, double_layer.mode, x)
+    solver = MobilitySolver(shear_rate, viscosity, wall, device, quadrature_order=quadrature_order,
+                            adaptive_quadrature=adaptive_quadrature, tolerance=tolerance,
+                            max_iterations=max_iterations, dtype=dtype, operator=operator,
+                            contact_refinement=contact_refinement, reuse=False)
+    return solver.solve(bodies, forces, torques, initial_guess)

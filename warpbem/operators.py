@@ -52,7 +52,7 @@ OPERATOR_MODES = ("auto", "dense", "matrix_free")
 class DoubleLayerOperator:
     def __init__(self, geometry: SurfaceGeometry, wall: bool, quadrature: QuadratureOptions,
                  dtype: str = "float64", device="cpu", mode: str = "auto",
-                 dense_memory_limit: float | None = None):
+                 dense_memory_limit: float | None = None, reuse: "DoubleLayerOperator | None" = None):
         if mode not in OPERATOR_MODES:
             raise ValueError(f"operator mode must be one of {OPERATOR_MODES}, got {mode!r}")
         from .kernels.assembly import build_kernels  # the top-level kernels/ folder, installed as warpbem.kernels
@@ -72,21 +72,48 @@ class DoubleLayerOperator:
         self.mode = mode if mode != "auto" else ("dense" if matrix_bytes <= dense_memory_limit else "matrix_free")
         self._matrix = None
         self._diagonal = None
+        self.reused_bodies = self._bodies_unchanged_since(reuse)
+        self._previous = reuse if self.reused_bodies.any() else None
+
+    def _bodies_unchanged_since(self, previous) -> np.ndarray:
+        """Bodies whose blocks can be copied from ``previous`` instead of assembled: same
+        elements (fixed adherent cells, "model no more than a scene needs"), same kernels."""
+        if (previous is None or previous.mode != "dense" or self.mode != "dense"
+                or previous.kernels is not self.kernels or previous.quadrature != self.quadrature
+                or previous.device != self.device):
+            return np.zeros(len(self.geometry.body_ranges), dtype=bool)
+        return self.geometry.unchanged_bodies(previous.geometry)
 
     def assemble(self):
         """The dense matrix of 1/2 + D (Warp array on the operator's device)."""
         if self._matrix is not None:
             return self._matrix
         wp = self._wp
-        n = self.geometry.n_elements
         matrix = wp.zeros((self.size, self.size), dtype=self.kernels.green.dtype, device=self.device)
-        runtime.launch_rows(
-            self.kernels.assemble_dense, n,
-            lambda start, stop: [start, self.surface, matrix[3 * start : 3 * stop]],
-            self.device, extra_dim=n,
-        )
+        kept = np.flatnonzero(self.reused_bodies)
+        moved = np.flatnonzero(~self.reused_bodies)
+        kept_rows = self.geometry.elements_of(kept)
+        moved_rows = self.geometry.elements_of(moved)
+
+        def indices(a):
+            return wp.array(np.ascontiguousarray(a, dtype=np.int32), dtype=int, device=self.device)
+
+        if len(kept_rows):
+            src = indices(self._previous.geometry.elements_of(kept))
+            dst = indices(kept_rows)
+            old = self._previous.assemble()
+            runtime.launch_rows(self.kernels.gather_entries, len(kept_rows),
+                                lambda start, stop: [start, old, src, src, matrix, dst, dst],
+                                self.device, extra_dim=len(kept_rows))
+        for rows, cols in ((moved_rows, np.arange(self.geometry.n_elements)), (kept_rows, moved_rows)):
+            if len(rows) and len(cols):
+                r, c = indices(rows), indices(cols)
+                runtime.launch_rows(self.kernels.assemble_entries, len(rows),
+                                    lambda start, stop: [start, self.surface, r, c, matrix],
+                                    self.device, extra_dim=len(cols))
         host = matrix.numpy() if self.device.is_cpu else matrix.numpy().copy()
-        for start, stop in self.geometry.body_ranges:
+        for p in moved:  # self blocks from the identity; kept bodies brought theirs along
+            start, stop = self.geometry.body_ranges[p]
             block = host[3 * start : 3 * stop, 3 * start : 3 * stop].reshape(stop - start, 3, stop - start, 3)
             row_sums = block.sum(axis=2)  # (a, j, i), the zero self block included
             idx = np.arange(stop - start)
@@ -95,6 +122,7 @@ class DoubleLayerOperator:
         if not self.device.is_cpu:
             matrix = wp.array(host, dtype=self.kernels.green.dtype, device=self.device)
         self._matrix = matrix
+        self._previous = None  # the old matrix may now be freed
         return matrix
 
     def _self_blocks(self):
