@@ -26,8 +26,14 @@ Boundary condition on body p (exterior limit of D is D^PV + q/2):
   is Wielandt's deflation that maps the rigid null space of (1/2 + D^PV) to eigenvalue 1
   (thesis eq. 2.7-2.17). With this sign and scaling the whole spectrum lies in (0, 1]; the
   thesis's second deflation (of its eigenvalue 2, eq. 2.15-2.16) is not needed for GMRES.
-* Fixed body (prescribed U_p, Omega_p, zero by default): (F_p, T_p) are unknowns, and six
-  extra equations <phi_p^l, q> = 0 remove the rigid part of q instead.
+* Fixed body (prescribed U_p, Omega_p, zero by default): (F_p, T_p) are unknown. Since the
+  double layer ignores the rigid part of q (below), that part is free to carry them: the six
+  coefficients c_p = <phi_p, q> stand for the loads, (F_p, T_p) = s_p * c_p, and the
+  completion V_p(s_p c_p) takes the place of P_p q in the equation. With s_p chosen so that
+  <phi_p^l, V_p(s_p e_l)> = 1 the rigid block is close to the identity, as for a free body:
+  the system stays square with a spectrum like the free bodies', instead of the saddle point
+  of six extra constraint rows (which took 137 GMRES iterations instead of 37 among four
+  adherent cells near the wall).
 
 Since (1/2 + D^PV) annihilates rigid fields exactly, the discrete operator is applied to the
 non-rigid part q - P q only. The identity already makes this exact for translations; for
@@ -106,7 +112,8 @@ def dof_indices(elements: np.ndarray) -> np.ndarray:
 
 
 class CompletedDoubleLayer:
-    """The discrete CDL system: unknowns [q (3 E), (F, T)/(FORCE_UNIT, TORQUE_UNIT) per fixed body]."""
+    """The discrete CDL system for the density q (3 E unknowns); for a fixed body the rigid
+    part of its density stands for its load (see the module docstring)."""
 
     def __init__(self, geometry: SurfaceGeometry, operator: DoubleLayerOperator, fixed,
                  previous: "CompletedDoubleLayer | None" = None):
@@ -115,9 +122,10 @@ class CompletedDoubleLayer:
         self.fixed = np.asarray(fixed, dtype=bool)
         self.fixed_index = np.cumsum(self.fixed) - 1
         self.n_density = 3 * geometry.n_elements
-        self.size = self.n_density + 6 * int(self.fixed.sum())
+        self.size = self.n_density
         self.ranges = [slice(3 * a, 3 * b) for a, b in geometry.body_ranges]
         self.weights = np.repeat(geometry.areas, 3)
+        self.free_dofs = np.repeat(~self.fixed[geometry.body_of_element], 3).astype(float)
         self.modes, self.cholesky = [], []
         for p, rows in enumerate(self.ranges):
             raw = geometry.rigid_modes(p)
@@ -127,6 +135,13 @@ class CompletedDoubleLayer:
             self.cholesky.append(factor)
         self.unchanged = geometry.unchanged_bodies(previous.geometry if previous else None)
         self.fixed_columns = self._fixed_body_columns(previous)
+        # load per unit rigid coefficient: makes <phi_l, V(s_l e_l)> = 1 (rigid block ~ identity)
+        self.load_per_coefficient = np.zeros(self.fixed_columns.shape[1])
+        for p in np.flatnonzero(self.fixed):
+            k = 6 * self.fixed_index[p]
+            rows = self.ranges[p]
+            response = self.modes[p].T @ (self.weights[rows, None] * self.fixed_columns[rows, k : k + 6])
+            self.load_per_coefficient[k : k + 6] = 1.0 / np.diag(response)
 
     def completion(self, body: int, loads: np.ndarray):
         """Poles (7, 3) and point forces (7, 3) of body p's completion for scaled (F, T)."""
@@ -170,14 +185,10 @@ class CompletedDoubleLayer:
         x0 = np.zeros(self.size)
         old = previous.geometry
         for p, rows in enumerate(self.ranges):
-            if p < len(old.body_ranges):
+            if p < len(old.body_ranges) and previous.fixed[p] == self.fixed[p]:
                 a0, a1 = old.body_ranges[p]
                 if a1 - a0 == rows.stop // 3 - rows.start // 3:
                     x0[rows] = solution[3 * a0 : 3 * a1]
-                if self.fixed[p] and p < len(previous.fixed) and previous.fixed[p]:
-                    k = self.n_density + 6 * self.fixed_index[p]
-                    k_old = previous.n_density + 6 * previous.fixed_index[p]
-                    x0[k : k + 6] = solution[k_old : k_old + 6]
         return x0
 
     def rigid_coefficients(self, body: int, density: np.ndarray) -> np.ndarray:
@@ -185,28 +196,30 @@ class CompletedDoubleLayer:
         rows = self.ranges[body]
         return self.modes[body].T @ (self.weights[rows] * density[rows])
 
-    def matvec(self, x: np.ndarray) -> np.ndarray:
-        q = x[: self.n_density]
+    def matvec(self, q: np.ndarray) -> np.ndarray:
         rigid = np.zeros_like(q)
-        out = np.empty_like(x)
+        loads = np.zeros(self.fixed_columns.shape[1])
         for p, rows in enumerate(self.ranges):
             coefficients = self.rigid_coefficients(p, q)
             rigid[rows] = self.modes[p] @ coefficients
             if self.fixed[p]:
-                k = self.n_density + 6 * self.fixed_index[p]
-                out[k : k + 6] = coefficients
+                k = 6 * self.fixed_index[p]
+                loads[k : k + 6] = coefficients * self.load_per_coefficient[k : k + 6]
         # (1/2 + D) annihilates rigid fields exactly; apply it to the non-rigid part only, so
         # the discretisation error of piecewise-constant rotations does not enter the motion
-        out[: self.n_density] = (self.operator.matvec(q - rigid) + rigid
-                                 + self.fixed_columns @ x[self.n_density :])
-        return out
+        return self.operator.matvec(q - rigid) + rigid * self.free_dofs + self.fixed_columns @ loads
+
+    def fixed_loads(self, body: int, q: np.ndarray) -> np.ndarray:
+        """Scaled (F, T) of a fixed body, carried by the rigid part of its density."""
+        k = 6 * self.fixed_index[body]
+        return self.rigid_coefficients(body, q) * self.load_per_coefficient[k : k + 6]
 
     def linear_operator(self) -> spla.LinearOperator:
         return spla.LinearOperator((self.size, self.size), matvec=self.matvec, dtype=np.float64)
 
     def rigid_velocity(self, body: int, x: np.ndarray) -> np.ndarray:
         """(U, Omega) of a free body in scaled units: the rigid field -P_p q."""
-        coefficients = self.rigid_coefficients(body, x[: self.n_density])
+        coefficients = self.rigid_coefficients(body, x)
         return -scipy.linalg.solve_triangular(self.cholesky[body].T, coefficients, lower=False)
 
 
@@ -266,7 +279,7 @@ class MobilitySolver:
         xi = geometry.collocation
         ambient = np.zeros_like(xi)
         ambient[:, 0] = self.shear_rate * length / speed * xi[:, 2]
-        rhs[: system.n_density] = -ambient.ravel()
+        rhs[:] = -ambient.ravel()
         free_poles, free_forces = [], []
         for p in np.flatnonzero(~fixed):
             loads = np.concatenate([forces[p] / force_scale, torques[p] / (force_scale * length)])
@@ -275,7 +288,7 @@ class MobilitySolver:
                 free_poles.append(poles)
                 free_forces.append(point_forces)
         if free_poles:
-            rhs[: system.n_density] -= double_layer.point_force_velocity(
+            rhs -= double_layer.point_force_velocity(
                 xi, np.concatenate(free_poles), np.concatenate(free_forces)).ravel()
         for p in np.flatnonzero(fixed):
             rhs[system.ranges[p]] += geometry.rigid_modes(p) @ (prescribed[p] / speed)
@@ -296,9 +309,9 @@ class MobilitySolver:
         force, torque = forces.copy(), torques.copy()
         for p, body in enumerate(bodies):
             if body.fixed:
-                k = system.n_density + 6 * system.fixed_index[p]
-                force[p] = x[k : k + 3] * FORCE_UNIT * force_scale
-                torque[p] = x[k + 3 : k + 6] * TORQUE_UNIT * force_scale * length
+                loads = system.fixed_loads(p, x)
+                force[p] = loads[:3] * FORCE_UNIT * force_scale
+                torque[p] = loads[3:] * TORQUE_UNIT * force_scale * length
                 velocity[p], angular_velocity[p] = body.velocity, body.angular_velocity
             else:
                 motion = system.rigid_velocity(p, x)

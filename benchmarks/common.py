@@ -1,0 +1,52 @@
+"""Shared helpers of the benchmark scripts: output folder, CSV tables, charts, timing."""
+
+import csv
+import time
+from pathlib import Path
+
+import numpy as np
+
+OUT = Path(__file__).resolve().parent.parent / "results" / "bench"
+
+
+def output(name: str) -> Path:
+    OUT.mkdir(parents=True, exist_ok=True)
+    return OUT / name
+
+
+def write_csv(name: str, rows: list[dict]) -> Path:
+    path = output(name)
+    with path.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    return path
+
+
+def print_table(rows: list[dict], formats: dict | None = None) -> None:
+    formats = formats or {}
+    keys = list(rows[0])
+    cells = [[formats.get(k, "{}").format(r[k]) if not isinstance(r[k], float) or k in formats
+              else f"{r[k]:.4g}" for k in keys] for r in rows]
+    widths = [max(len(k), *(len(c[i]) for c in cells)) for i, k in enumerate(keys)]
+    print("  ".join(k.rjust(w) for k, w in zip(keys, widths)))
+    for c in cells:
+        print("  ".join(v.rjust(w) for v, w in zip(c, widths)), flush=True)
+
+
+def best_time(fn, repeats: int = 3) -> float:
+    best = np.inf
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t)
+    return best
+
+
+def pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
