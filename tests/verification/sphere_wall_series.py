@@ -141,6 +141,31 @@ def brenner_lambda(h_over_a, n_terms=None):
     return float(4.0 / 3.0 * s * np.sum(terms))
 
 
+def stimson_jeffery_lambda(half_distance_over_a, n_terms=None):
+    """Stimson & Jeffery (1926): two equal spheres of radius a, centres 2 h apart, translating
+    with the same velocity U along their line of centres in unbounded fluid; each feels
+    F = -6 pi mu a U lambda with (Happel & Brenner 1965, eq. 6-3.55)
+
+        lambda = (4/3) sinh(alpha) sum_{n>=1} n(n+1)/((2n-1)(2n+3))
+                 * [ 1 - (4 sinh^2((n+1/2)alpha) - (2n+1)^2 sinh^2(alpha))
+                         / (2 sinh((2n+1)alpha) + (2n+1) sinh(2 alpha)) ],
+
+    alpha = arccosh(h/a). lambda -> 1 far apart and 0.645 when the spheres touch. Written,
+    like ``brenner_lambda``, with E = exp(-(2n+1) alpha) so that nothing overflows:
+        1 - Y/X = E (2 - 2E + m sinh 2a + m^2 sinh^2 a) / (1 - E^2 + E m sinh 2a).
+    """
+    al = _alpha(half_distance_over_a)
+    N = _n_terms(al, n_terms)
+    n = np.arange(1, N + 1, dtype=float)
+    m = 2.0 * n + 1.0
+    E = np.exp(-m * al)
+    s = math.sinh(al)
+    num = E * (2.0 - 2.0 * E + m * math.sinh(2.0 * al) + m * m * s * s)
+    den = 1.0 - E * E + E * m * math.sinh(2.0 * al)
+    terms = n * (n + 1.0) / ((2.0 * n - 1.0) * (2.0 * n + 3.0)) * num / den
+    return float(4.0 / 3.0 * s * np.sum(terms))
+
+
 # ------------------------------------- 2a. classical O'Neill / Dean & O'Neill recurrence
 def _oneill_classical(al, N):
     """Ft, Tt, Fr, Tr from the classical single three-term recurrence.
