@@ -5,9 +5,9 @@ from . import mesh, units
 from .body import Body
 from .linalg import ConvergenceError
 from .mesh import MeshError
-from .mobility import MobilitySolution, MobilitySolver, solve_mobility
+from .mobility import ContactResolutionWarning, MobilitySolution, MobilitySolver, solve_mobility
 from .placement import PlacementError
 
 __version__ = "0.1.0"
 __all__ = ["mesh", "units", "Body", "solve_mobility", "MobilitySolver", "MobilitySolution", "ConvergenceError",
-           "MeshError", "PlacementError", "__version__"]
+           "MeshError", "PlacementError", "ContactResolutionWarning", "__version__"]

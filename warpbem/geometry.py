@@ -28,13 +28,13 @@ class SurfaceGeometry:
     qp_positions: np.ndarray  # (E, Q, 3)
     qp_area_vectors: np.ndarray  # (E, Q, 3) outward normal * Jacobian * weight
     order: int
+    unresolved_contacts: dict  # {(body, neighbour or refinement.WALL): gap}, scaled units
 
     @classmethod
     def from_bodies(cls, bodies, order: int, length_scale: float, wall: bool,
                     contact_refinement: float = 0.0) -> "SurfaceGeometry":
         nodes = [b.world_nodes()[b.mesh.elements] / length_scale for b in bodies]
-        if contact_refinement > 0:
-            nodes = refine_near_contact(nodes, wall, contact_refinement)
+        nodes, unresolved = refine_near_contact(nodes, wall, contact_refinement)
         counts = [len(n) for n in nodes]
         element_nodes = np.concatenate(nodes)
         stops = np.cumsum(counts)
@@ -53,6 +53,7 @@ class SurfaceGeometry:
             qp_positions=positions,
             qp_area_vectors=area_vectors,
             order=order,
+            unresolved_contacts=unresolved,
         )
 
     def unchanged_bodies(self, previous: "SurfaceGeometry | None") -> np.ndarray:

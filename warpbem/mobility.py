@@ -43,6 +43,7 @@ an O(h^2) error (sphere under torque, 96 elements: 5e-3 -> 1.7e-4).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,6 +55,11 @@ from .geometry import SurfaceGeometry
 from .linalg import gmres
 from .operators import DoubleLayerOperator, QuadratureOptions
 from .placement import check_placement
+from .refinement import WALL
+
+class ContactResolutionWarning(UserWarning):
+    """Two surfaces closer than the contact refinement resolves: accuracy degrades there."""
+
 
 FORCE_UNIT = 6.0 * np.pi  # scaled force of a unit-speed unit sphere; scales the load unknowns
 TORQUE_UNIT = 8.0 * np.pi
@@ -247,7 +253,8 @@ class MobilitySolver:
         self.operator = operator
         self.contact_refinement = _finite("contact_refinement", contact_refinement)
         self.reuse = bool(reuse)
-        self._last = None  # (CompletedDoubleLayer, solution vector) of the previous solve
+        self._last = None  # (CompletedDoubleLayer, solution vector, speed) of the previous solve
+        self._warned = set()  # contacts already reported by this solver
 
     def solve(self, bodies, forces=None, torques=None, initial_guess=None) -> MobilitySolution:
         bodies = list(bodies)
@@ -271,6 +278,7 @@ class MobilitySolver:
         previous = self._last[0] if self.reuse and self._last else None
         geometry = SurfaceGeometry.from_bodies(bodies, self.quadrature.order, length, self.wall,
                                                self.contact_refinement)
+        self._warn_unresolved(geometry, length)
         double_layer = DoubleLayerOperator(geometry, self.wall, self.quadrature, self.dtype, self.device,
                                            self.operator, reuse=previous.operator if previous else None)
         system = CompletedDoubleLayer(geometry, double_layer, fixed, previous)
@@ -320,6 +328,23 @@ class MobilitySolver:
         return MobilitySolution(velocity, angular_velocity, force, torque, result.iterations,
                                 result.residual, result.converged, double_layer.mode, x,
                                 double_layer.reused_bodies)
+
+
+    def _warn_unresolved(self, geometry, length):
+        """Warn once per contact (for the life of this solver) that is closer than the contact
+        refinement resolves; the stability map (README) shows the error grows past about 1 %
+        (3 % for squeeze flow) there."""
+        for (p, q), gap in sorted(geometry.unresolved_contacts.items()):
+            if (p, q) in self._warned or (q, p) in self._warned:
+                continue
+            self._warned.add((p, q))
+            what = "the wall" if q == WALL else f"body {q}"
+            warnings.warn(
+                f"body {p} and {what} are {gap * length:.3g} m apart ({gap:.3g} mean radii), closer than"
+                f" the contact refinement resolves (contact_refinement={self.contact_refinement:g});"
+                " expect errors above 1 % in the motion and loads near this contact (README:"
+                " stability map). Finer meshes or a larger contact_refinement help.",
+                ContactResolutionWarning, stacklevel=3)
 
 
 def solve_mobility(

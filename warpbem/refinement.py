@@ -36,30 +36,60 @@ def element_radius(element_nodes: np.ndarray) -> np.ndarray:
     return np.linalg.norm(element_nodes - element_nodes[:, 8:9], axis=-1).max(axis=1)
 
 
+WALL = -1  # neighbour id of the wall in the contact lists
+
+
+def _gaps(meshes, p, wall, ratio):
+    """Gap from each element centre of body p to the wall and to every other body near enough
+    to matter, and the nearest neighbour (WALL or a body index)."""
+    elements = meshes[p]
+    centres = elements[:, 8]
+    gap = np.full(len(elements), np.inf)
+    neighbour = np.full(len(elements), WALL)
+    if wall:
+        gap = elements[:, :, 2].min(axis=1)
+    clouds = [m.reshape(-1, 3) for m in meshes]
+    middle = clouds[p].mean(axis=0)
+    reach = np.linalg.norm(clouds[p] - middle, axis=1).max()
+    largest = element_radius(elements).max() * ratio
+    for q, cloud in enumerate(clouds):
+        if q == p:
+            continue
+        other = cloud.mean(axis=0)
+        # only bodies whose bounding spheres come within reach of a coarse element
+        if np.linalg.norm(middle - other) > reach + np.linalg.norm(cloud - other, axis=1).max() + largest:
+            continue
+        d = np.sqrt(((centres[:, None, :] - cloud[None, :, :]) ** 2).sum(axis=-1).min(axis=1))
+        closer = d < gap
+        gap[closer] = d[closer]
+        neighbour[closer] = q
+    return gap, neighbour
+
+
 def refine_near_contact(element_nodes: list[np.ndarray], wall: bool, ratio: float,
-                        max_levels: int = 4) -> list[np.ndarray]:
-    """Refine every body's elements (list of (E_p, 9, 3) arrays, one per body)."""
+                        max_levels: int = 4, warn_ratio: float = 1.0) -> tuple[list[np.ndarray], dict]:
+    """Refine every body's elements (list of (E_p, 9, 3) arrays, one per body); ``ratio`` 0
+    refines nothing.
+
+    Returns the refined meshes and the contacts they leave unresolved: {(p, q): smallest gap}
+    for body p near body q (q = WALL for the wall) where an element of p is still larger than
+    its gap over ``warn_ratio``. Beyond that the error passes about 1 % (README, stability map).
+    """
     meshes = [e.copy() for e in element_nodes]
-    for _ in range(max_levels):
-        clouds = [m.reshape(-1, 3) for m in meshes]
-        middles = [c.mean(axis=0) for c in clouds]
-        reach = [np.linalg.norm(c - m, axis=1).max() for c, m in zip(clouds, middles)]
+    for _ in range(max_levels if ratio > 0 else 0):
         changed = False
         for p, elements in enumerate(meshes):
-            centres = elements[:, 8]
-            largest = element_radius(elements).max() * ratio
-            gap = np.full(len(elements), np.inf)
-            if wall:
-                gap = elements[:, :, 2].min(axis=1)
-            for q, cloud in enumerate(clouds):
-                # only bodies whose bounding spheres come within reach of a coarse element
-                if q != p and np.linalg.norm(middles[p] - middles[q]) < reach[p] + reach[q] + largest:
-                    d2 = ((centres[:, None, :] - cloud[None, :, :]) ** 2).sum(axis=-1)
-                    gap = np.minimum(gap, np.sqrt(d2.min(axis=1)))
+            gap, _ = _gaps(meshes, p, wall, ratio)
             coarse = element_radius(elements) * ratio > gap
             if coarse.any():
                 meshes[p] = np.concatenate([elements[~coarse], split(elements[coarse])])
                 changed = True
         if not changed:
             break
-    return meshes
+    unresolved = {}
+    for p, elements in enumerate(meshes):
+        gap, neighbour = _gaps(meshes, p, wall, max(ratio, warn_ratio))
+        coarse = element_radius(elements) * warn_ratio > gap
+        for q in np.unique(neighbour[coarse]):
+            unresolved[(p, int(q))] = float(gap[coarse & (neighbour == q)].min())
+    return meshes, unresolved
