@@ -55,8 +55,8 @@ def wall_errors(mesh, gap, options):
 def pair_errors(mesh, gap, options):
     h = 1.0 + gap / 2
     bodies = [wb.Body(mesh, position=(0, 0, 0)), wb.Body(mesh, position=(2 * h, 0, 0))]
-    sol, stalled = solve(bodies, wall=False, forces=[[6 * np.pi, 0, 0]] * 2, **options)
-    err = np.nan if sol is None else abs(1 / sol.velocity[0, 0] / series.stimson_jeffery_lambda(h) - 1)
+    sol, stalled = solve(bodies, wall=False, forces=[[6 * np.pi, 0, 0], [-6 * np.pi, 0, 0]], **options)
+    err = np.nan if sol is None else abs(1 / sol.velocity[0, 0] / series.approaching_spheres_lambda(h) - 1)
     return dict(err_pair=err, iterations_pair=np.nan if sol is None else sol.iterations, stalled_pair=stalled,
                 elements_pair=0 if sol is None else len(sol.solution_vector) // 3)
 
@@ -82,7 +82,7 @@ def main():
     plt = pyplot()
     fig, axes = plt.subplots(2, 3, figsize=(16, 8), sharex=True)
     panels = [("err_normal", "sphere -> wall: Brenner force error"), ("err_shear", "sphere in shear near wall: max(U, Omega) error"),
-              ("err_pair", "two spheres: Stimson-Jeffery error")]
+              ("err_pair", "two approaching spheres: force error")]
     for col, (key, title) in enumerate(panels):
         its_key = "iterations_pair" if key == "err_pair" else "iterations"
         for name in OPTIONS:

@@ -166,6 +166,31 @@ def stimson_jeffery_lambda(half_distance_over_a, n_terms=None):
     return float(4.0 / 3.0 * s * np.sum(terms))
 
 
+def approaching_spheres_lambda(half_distance_over_a, n_terms=None):
+    """Two equal spheres, centres 2 h apart, approaching each other along their line of centres
+    with speeds U and -U (Maude 1961; Brenner 1961, whose paper treats this case beside the
+    wall): each feels F = -6 pi mu a U lambda with
+
+        lambda = (4/3) sinh(alpha) sum_{n>=1} n(n+1)/((2n-1)(2n+3))
+                 * [ (4 cosh^2((n+1/2)alpha) + (2n+1)^2 sinh^2(alpha))
+                     / (2 sinh((2n+1)alpha) - (2n+1) sinh(2 alpha)) - 1 ],
+
+    alpha = arccosh(h/a); the squeeze flow in the gap makes lambda ~ a / (2 (2h - 2a)) near
+    contact. With E = exp(-(2n+1) alpha) the bracket is
+        E (2 + 2E + m^2 sinh^2 a + m sinh 2a) / (1 - E^2 - E m sinh 2a).
+    """
+    al = _alpha(half_distance_over_a)
+    N = _n_terms(al, n_terms)
+    n = np.arange(1, N + 1, dtype=float)
+    m = 2.0 * n + 1.0
+    E = np.exp(-m * al)
+    s = math.sinh(al)
+    num = E * (2.0 + 2.0 * E + m * m * s * s + m * math.sinh(2.0 * al))
+    den = 1.0 - E * E - E * m * math.sinh(2.0 * al)
+    terms = n * (n + 1.0) / ((2.0 * n - 1.0) * (2.0 * n + 3.0)) * num / den
+    return float(4.0 / 3.0 * s * np.sum(terms))
+
+
 # ------------------------------------- 2a. classical O'Neill / Dean & O'Neill recurrence
 def _oneill_classical(al, N):
     """Ft, Tt, Fr, Tr from the classical single three-term recurrence.
