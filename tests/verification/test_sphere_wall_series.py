@@ -37,3 +37,14 @@ def test_independent_solvers_agree_and_far_field_limits():
     assert np.isclose(series.brenner_lambda(1e3), 1 + 9 / 8e3, rtol=1e-5)  # Lorentz: 1 + 9a/(8h)
     with pytest.raises(ValueError):
         series.brenner_lambda(1.0)
+
+
+def test_two_sphere_series_limits():
+    # Stimson & Jeffery (1926): touching spheres falling together, lambda = 0.645 (their table)
+    assert abs(series.stimson_jeffery_lambda(1.0 + 1e-6) - 0.645) < 1e-3
+    # far apart: each sphere moves in the other's Stokeslet, lambda = 1 - 3a/(4h) + O(a/h)^2
+    assert abs(series.stimson_jeffery_lambda(100.0) - (1 - 3 / 400)) < 1e-4
+    assert abs(series.approaching_spheres_lambda(100.0) - (1 + 3 / 400)) < 1e-4
+    # lubrication: approaching spheres, gap eps = 2(h - a): lambda -> a / (2 eps)
+    h = 1.0 + 1e-4
+    assert abs(series.approaching_spheres_lambda(h) * 2 * (2 * (h - 1)) - 1) < 0.02
