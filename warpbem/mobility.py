@@ -332,8 +332,7 @@ class MobilitySolver:
 
     def _warn_unresolved(self, geometry, length):
         """Warn once per contact (for the life of this solver) that is closer than the contact
-        refinement resolves; the stability map (README) shows the error grows past about 1 %
-        (3 % for squeeze flow) there."""
+        refinement resolves (see refinement.refine_near_contact and the README stability map)."""
         for (p, q), gap in sorted(geometry.unresolved_contacts.items()):
             if (p, q) in self._warned or (q, p) in self._warned:
                 continue
@@ -341,9 +340,10 @@ class MobilitySolver:
             what = "the wall" if q == WALL else f"body {q}"
             warnings.warn(
                 f"body {p} and {what} are {gap * length:.3g} m apart ({gap:.3g} mean radii), closer than"
-                f" the contact refinement resolves (contact_refinement={self.contact_refinement:g});"
-                " expect errors above 1 % in the motion and loads near this contact (README:"
-                " stability map). Finer meshes or a larger contact_refinement help.",
+                f" the contact refinement resolves (contact_refinement={self.contact_refinement:g}): the"
+                " elements there are wider than a third of the gap. Squeeze-flow forces lose accuracy"
+                " first (about 3 % at this point, growing fast as the gap closes; README: stability map);"
+                " finer meshes or a larger contact_refinement help.",
                 ContactResolutionWarning, stacklevel=3)
 
 

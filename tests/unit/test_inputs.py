@@ -30,6 +30,7 @@ def test_wall_crossing_names_the_body():
     assert np.all(np.isfinite(sol.velocity))
 
 
+@pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")  # a 1e-3 gap, on purpose
 def test_overlap_names_both_bodies_even_when_barely_touching():
     bodies = [wb.Body(SPHERE, position=(0, 0, 2.0)), wb.Body(SPHERE, position=(1.999, 0, 2.0))]
     with pytest.raises(wb.PlacementError, match="bodies 0 and 1 overlap"):

@@ -136,14 +136,14 @@ def test_unresolved_contacts_warn_once_naming_the_bodies():
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no warning where the contact is resolved
         wb.solve_mobility([wb.Body(sphere, position=(0, 0, 1.1))], shear_rate=1.0)
-    with pytest.warns(wb.ContactResolutionWarning, match="body 0 and the wall are 0.01 m apart"):
-        wb.solve_mobility([wb.Body(sphere, position=(0, 0, 1.01))], shear_rate=1.0)
+    with pytest.warns(wb.ContactResolutionWarning, match="body 0 and the wall are 0.03 m apart"):
+        wb.solve_mobility([wb.Body(sphere, position=(0, 0, 1.03))], shear_rate=1.0)
     pair = [wb.Body(sphere, position=(0, 0, 3.0)), wb.Body(sphere, position=(2.005, 0, 3.0))]
     with pytest.warns(wb.ContactResolutionWarning, match="body 0 and body 1"):
         wb.solve_mobility(pair, shear_rate=1.0)
     solver = wb.MobilitySolver(shear_rate=1.0)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        for z in (1.01, 1.011, 1.012):
+        for z in (1.03, 1.031, 1.032):
             solver.solve([wb.Body(sphere, position=(0, 0, z))])
     assert len([w for w in caught if issubclass(w.category, wb.ContactResolutionWarning)]) == 1

@@ -41,6 +41,7 @@ def test_resistances_near_the_wall(sphere_mesh, h, tol):
     assert abs(f[2] / (6 * np.pi * series.brenner_lambda(h)) - 1) < tol
 
 
+@pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")  # the bare mesh, on purpose
 def test_contact_refinement_is_what_resolves_the_gap(sphere_mesh):
     """Brenner's squeeze flow at h/a = 1.1 on the bare seed mesh is 18 % off; the refined
     mesh is within 2 %: the gap must be resolved by elements, not only by quadrature."""
