@@ -85,11 +85,11 @@ def main():
               ("err_pair", "two approaching spheres: force error")]
     for col, (key, title) in enumerate(panels):
         its_key = "iterations_pair" if key == "err_pair" else "iterations"
-        for name in OPTIONS:
+        for (name, style) in zip(OPTIONS, ("o-", "s--", "D-", "x:")):
             sub = [r for r in rows if r["option"] == name]
             x = [r["gap_over_element"] for r in sub]
-            axes[0, col].loglog(x, [r[key] for r in sub], "o-", label=name)
-            axes[1, col].semilogx(x, [r[its_key] for r in sub], "o-", label=name)
+            axes[0, col].loglog(x, [r[key] for r in sub], style, label=name)
+            axes[1, col].semilogx(x, [r[its_key] for r in sub], style, label=name)
         axes[0, col].axhline(0.01, color="0.5", ls=":", lw=1)
         axes[0, col].set_title(title, fontsize=10)
         axes[1, col].set_xlabel("gap / element size (k = 4: element edge 0.39 radius)")
