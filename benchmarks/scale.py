@@ -89,7 +89,9 @@ def main():
         rows.append(row)
         print({k: (round(v, 4) if isinstance(v, float) else v) for k, v in row.items()}, flush=True)
 
-    keys = sorted({k for r in rows for k in r}, key=lambda k: list(rows[-1]).index(k) if k in rows[-1] else 99)
+    keys = ["cells", "elements", "matrix_GB", "warp_free_apply_s", "warp_free_adaptive_apply_s", "numpy_apply_s",
+            "numpy_over_warp", "max_abs_diff", "assembly_s", "dense_apply_s", "free_over_dense_apply",
+            "cores_free_apply", "cores_assembly", "solve_dense_s", "solve_matrix_free_s", "gmres_iterations"]
     table = [{k: r.get(k, float("nan")) for k in keys} for r in rows]
     print()
     print_table(table)
