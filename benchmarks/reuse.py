@@ -7,7 +7,7 @@ Cells: 5 um spheres (96 elements), adherent centres 5.25 um above the wall on a 
 15 um apart, free cell 7.75 um high moving 0.1 um per solve; contact refinement off so that
 every N has the same elements per cell.
 
-    python benchmarks/reuse.py [--counts 1 4 16 64] [--solves 4]
+    python benchmarks/reuse.py [--counts 1 4 16 64] [--solves 4] [--device cpu]
 """
 
 import argparse
@@ -26,8 +26,9 @@ def scene(n_fixed, mesh, x_free):
     return fixed + [wb.Body(mesh, position=(x_free, -12e-6, 7.75e-6))]
 
 
-def run(n_fixed, reuse, solves, mesh):
-    solver = wb.MobilitySolver(shear_rate=100.0, viscosity=1.2e-3, contact_refinement=0.0, reuse=reuse)
+def run(n_fixed, reuse, solves, mesh, device="cpu"):
+    solver = wb.MobilitySolver(shear_rate=100.0, viscosity=1.2e-3, contact_refinement=0.0, reuse=reuse,
+                               device=device)
     times, iterations = [], []
     for step in range(solves):
         bodies = scene(n_fixed, mesh, -20e-6 + 0.1e-6 * step)
@@ -43,13 +44,14 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--counts", type=int, nargs="+", default=[1, 4, 16, 64])
     parser.add_argument("--solves", type=int, default=4)
+    parser.add_argument("--device", default="cpu")
     args = parser.parse_args()
     mesh = wb.mesh.sphere(5e-6, 4)
     run(1, True, 2, mesh)  # compile kernels outside the timings
     rows = []
     for n in args.counts:
-        plain = run(n, False, args.solves, mesh)
-        kept = run(n, True, args.solves, mesh)
+        plain = run(n, False, args.solves, mesh, args.device)
+        kept = run(n, True, args.solves, mesh, args.device)
         rows.append(dict(fixed_cells=n, elements=96 * (n + 1), mode=kept[3],
                          first_solve_s=kept[2], rebuild_s=plain[0], reuse_s=kept[0],
                          speedup=plain[0] / kept[0], iterations_rebuild=plain[1], iterations_reuse=kept[1]))
