@@ -7,22 +7,13 @@ the times side by side, measured in the same run, and the speed-up ratio.
 """
 
 import argparse
-import time
 
 import numpy as np
 
+from common import best_time
 from warpbem import Body, mesh, runtime
 from warpbem.geometry import SurfaceGeometry
 from warpbem.operators import DoubleLayerOperator, QuadratureOptions
-
-
-def timed(fn, repeats):
-    best = np.inf
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t)
-    return best
 
 
 def main():
@@ -45,7 +36,7 @@ def main():
 
         op = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="matrix_free")
         op.matvec(q)  # compile and build the self blocks outside the timing
-        rows.append((threads, timed(assemble, args.repeats), timed(lambda: op.matvec(q), args.repeats)))
+        rows.append((threads, best_time(assemble, args.repeats), best_time(lambda: op.matvec(q), args.repeats)))
     print(f"{args.bodies} bodies x {sphere.n_elements} elements = {geometry.n_elements} elements")
     print(f"{'threads':>8} {'assembly [s]':>13} {'matrix-free apply [s]':>22}")
     for threads, a, m in rows:

@@ -106,6 +106,18 @@ def _coth(x):
     return (1.0 + e) / (1.0 - e)
 
 
+def _axisymmetric_series(h_over_a, n_terms, bracket):
+    """(4/3) sinh(alpha) sum_{n>=1} n(n+1)/((2n-1)(2n+3)) * bracket(m, E, sinh a, sinh 2a), the
+    common form of the Stimson-Jeffery stream-function solutions below, with m = 2n + 1 and
+    E = exp(-m alpha) (each bracket is written in E so that nothing overflows)."""
+    al = _alpha(h_over_a)
+    n = np.arange(1, _n_terms(al, n_terms) + 1, dtype=float)
+    m = 2.0 * n + 1.0
+    terms = n * (n + 1.0) / ((2.0 * n - 1.0) * (2.0 * n + 3.0)) * bracket(m, np.exp(-m * al), math.sinh(al),
+                                                                          math.sinh(2.0 * al))
+    return float(4.0 / 3.0 * math.sinh(al) * np.sum(terms))
+
+
 # ------------------------------------------------------------------ 1. Brenner (1961)
 def brenner_lambda(h_over_a, n_terms=None):
     """Brenner (1961) drag correction for a sphere translating normal to a plane wall.
@@ -127,18 +139,9 @@ def brenner_lambda(h_over_a, n_terms=None):
     n_terms : number of series terms (default ceil(30/alpha) + 10; terms decay like
         exp(-(2n+1) alpha)).
     """
-    al = _alpha(h_over_a)
-    N = _n_terms(al, n_terms)
-    n = np.arange(1, N + 1, dtype=float)
-    m = 2.0 * n + 1.0
-    # Each bracket rewritten with E = exp(-(2n+1) alpha) so nothing overflows:
-    #   ratio - 1 = E (2 - 2E + m sinh 2a + m^2 sinh^2 a) / ((1 - E)^2 - m^2 sinh^2 a E)
-    E = np.exp(-m * al)
-    s = math.sinh(al)
-    num = E * (2.0 - 2.0 * E + m * math.sinh(2.0 * al) + m * m * s * s)
-    den = (1.0 - E) ** 2 - m * m * s * s * E
-    terms = n * (n + 1.0) / ((2.0 * n - 1.0) * (2.0 * n + 3.0)) * num / den
-    return float(4.0 / 3.0 * s * np.sum(terms))
+    # ratio - 1 = E (2 - 2E + m sinh 2a + m^2 sinh^2 a) / ((1 - E)^2 - m^2 sinh^2 a E)
+    return _axisymmetric_series(h_over_a, n_terms, lambda m, E, s, s2: E * (2.0 - 2.0 * E + m * s2 + m * m * s * s)
+                                / ((1.0 - E) ** 2 - m * m * s * s * E))
 
 
 def stimson_jeffery_lambda(half_distance_over_a, n_terms=None):
@@ -154,16 +157,8 @@ def stimson_jeffery_lambda(half_distance_over_a, n_terms=None):
     like ``brenner_lambda``, with E = exp(-(2n+1) alpha) so that nothing overflows:
         1 - Y/X = E (2 - 2E + m sinh 2a + m^2 sinh^2 a) / (1 - E^2 + E m sinh 2a).
     """
-    al = _alpha(half_distance_over_a)
-    N = _n_terms(al, n_terms)
-    n = np.arange(1, N + 1, dtype=float)
-    m = 2.0 * n + 1.0
-    E = np.exp(-m * al)
-    s = math.sinh(al)
-    num = E * (2.0 - 2.0 * E + m * math.sinh(2.0 * al) + m * m * s * s)
-    den = 1.0 - E * E + E * m * math.sinh(2.0 * al)
-    terms = n * (n + 1.0) / ((2.0 * n - 1.0) * (2.0 * n + 3.0)) * num / den
-    return float(4.0 / 3.0 * s * np.sum(terms))
+    return _axisymmetric_series(half_distance_over_a, n_terms, lambda m, E, s, s2: E * (2.0 - 2.0 * E + m * s2 + m * m * s * s)
+                                / (1.0 - E * E + E * m * s2))
 
 
 def approaching_spheres_lambda(half_distance_over_a, n_terms=None):
@@ -179,16 +174,8 @@ def approaching_spheres_lambda(half_distance_over_a, n_terms=None):
     contact. With E = exp(-(2n+1) alpha) the bracket is
         E (2 + 2E + m^2 sinh^2 a + m sinh 2a) / (1 - E^2 - E m sinh 2a).
     """
-    al = _alpha(half_distance_over_a)
-    N = _n_terms(al, n_terms)
-    n = np.arange(1, N + 1, dtype=float)
-    m = 2.0 * n + 1.0
-    E = np.exp(-m * al)
-    s = math.sinh(al)
-    num = E * (2.0 + 2.0 * E + m * m * s * s + m * math.sinh(2.0 * al))
-    den = 1.0 - E * E - E * m * math.sinh(2.0 * al)
-    terms = n * (n + 1.0) / ((2.0 * n - 1.0) * (2.0 * n + 3.0)) * num / den
-    return float(4.0 / 3.0 * s * np.sum(terms))
+    return _axisymmetric_series(half_distance_over_a, n_terms, lambda m, E, s, s2: E * (2.0 + 2.0 * E + m * m * s * s + m * s2)
+                                / (1.0 - E * E - E * m * s2))
 
 
 # ------------------------------------- 2a. classical O'Neill / Dean & O'Neill recurrence
