@@ -239,7 +239,7 @@ class MobilitySolver:
     """
 
     def __init__(self, shear_rate: float = 0.0, viscosity: float = 1e-3, wall: bool = True, device="cpu", *,
-                 quadrature_order: int = 3, adaptive_quadrature: bool = True, tolerance: float = 1e-8,
+                 quadrature_order: int = 2, adaptive_quadrature: bool = True, tolerance: float = 1e-8,
                  max_iterations: int = 600, dtype: str = "float64", operator: str = "auto",
                  contact_refinement: float = 3.0, reuse: bool = True):
         self.shear_rate = _finite("shear_rate", shear_rate)
@@ -356,7 +356,7 @@ def solve_mobility(
     torques=None,
     device="cpu",
     *,
-    quadrature_order: int = 3,
+    quadrature_order: int = 2,
     adaptive_quadrature: bool = True,
     tolerance: float = 1e-8,
     max_iterations: int = 600,

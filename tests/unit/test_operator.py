@@ -10,8 +10,9 @@ from warpbem.operators import DoubleLayerOperator, QuadratureOptions
 
 
 def make_operator(bodies, wall, mode="dense", device="cpu", **quadrature):
-    geometry = SurfaceGeometry.from_bodies(bodies, quadrature.get("order", 3), 1.0, wall)
-    return DoubleLayerOperator(geometry, wall, QuadratureOptions(**quadrature), "float64", device, mode)
+    options = QuadratureOptions(**{"order": 3, **quadrature})
+    geometry = SurfaceGeometry.from_bodies(bodies, options.order, 1.0, wall)
+    return DoubleLayerOperator(geometry, wall, options, "float64", device, mode)
 
 
 def two_spheres_near_wall():
