@@ -342,8 +342,8 @@ class MobilitySolver:
                 f"body {p} and {what} are {gap * length:.3g} m apart ({gap:.3g} mean radii), closer than"
                 f" the contact refinement resolves (contact_refinement={self.contact_refinement:g}): the"
                 " elements there are wider than a third of the gap. Squeeze-flow forces lose accuracy"
-                " first (about 3 % at this point, growing fast as the gap closes; README: stability map);"
-                " finer meshes or a larger contact_refinement help.",
+                " first, and the error grows fast as the gap closes (README: stability map); finer"
+                " meshes or a larger contact_refinement help.",
                 ContactResolutionWarning, stacklevel=3)
 
 
