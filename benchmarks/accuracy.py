@@ -3,7 +3,8 @@
 Relative errors of the free sphere in shear (U, Omega; GCB 1967b), the held sphere (f*, t*),
 parallel resistances (Ft, Tr; O'Neill 1964 / GCB 1967a) and normal motion (lambda; Brenner
 1961) at several heights, for the seed's mesh (k = 4, no contact refinement), the default
-(k = 4, contact refinement 3) and a refined mesh (k = 8), with element counts and times.
+(k = 4, contact refinement 3) and a refined mesh (k = 8), with element counts and times;
+solver defaults otherwise (2x2 Gauss, adaptive near-field quadrature).
 
     python benchmarks/accuracy.py [--heights 3 1.5 1.2 1.1 1.05]
 """
@@ -21,8 +22,8 @@ import warpbem as wb
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "verification"))
 import sphere_wall_series as series  # noqa: E402  (the reference implementation of the tests)
 
-CONFIGS = {"seed (k=4, no refinement)": (4, 0.0), "default (k=4, refinement 3)": (4, 3.0),
-           "refined (k=8, refinement 3)": (8, 3.0)}
+CONFIGS = {"k=4, no contact refinement": (4, 0.0), "default (k=4, refinement 3)": (4, 3.0),
+           "k=8, refinement 3": (8, 3.0)}
 
 
 def solve(mesh, h, ratio, fixed=False, motion=None, shear=0.0):
