@@ -3,7 +3,7 @@ plus automatic contact refinement), against the exact bipolar-coordinate series 
 ``sphere_wall_series.py`` (Brenner 1961; O'Neill 1964 / GCB 1967a; GCB 1967b).
 
 Target of the core-engine issue: within 3 % at h/a = 1.1. Measured (k = 4, refinement 3):
-h/a = 1.1: U 0.55 %, Omega 0.42 %, f* 0.18 %, t* 0.14 %, Ft 0.29 %, Tr 0.19 %, Brenner 1.8 %.
+h/a = 1.1: U 0.55 %, Omega 0.42 %, f* 0.18 %, t* 0.14 %, Ft 0.28 %, Tr 0.19 %, Brenner 1.8 %.
 """
 
 import numpy as np
