@@ -57,6 +57,7 @@ from .operators import DoubleLayerOperator, QuadratureOptions
 from .placement import check_placement
 from .refinement import WALL
 
+
 class ContactResolutionWarning(UserWarning):
     """Two surfaces closer than the contact refinement resolves: accuracy degrades there."""
 
@@ -127,8 +128,7 @@ class CompletedDoubleLayer:
         self.operator = operator
         self.fixed = np.asarray(fixed, dtype=bool)
         self.fixed_index = np.cumsum(self.fixed) - 1
-        self.n_density = 3 * geometry.n_elements
-        self.size = self.n_density
+        self.size = 3 * geometry.n_elements
         self.ranges = [slice(3 * a, 3 * b) for a, b in geometry.body_ranges]
         self.weights = np.repeat(geometry.areas, 3)
         self.free_dofs = np.repeat(~self.fixed[geometry.body_of_element], 3).astype(float)
@@ -163,7 +163,7 @@ class CompletedDoubleLayer:
         """Velocity at every collocation point of the six unit loads of each fixed body; the
         rows of bodies that did not move are copied from ``previous`` when the fixed body did
         not move either."""
-        columns = np.zeros((self.n_density, 6 * int(self.fixed.sum())))
+        columns = np.zeros((self.size, 6 * int(self.fixed.sum())))
         all_rows = np.arange(self.geometry.n_elements)
         for p in np.flatnonzero(self.fixed):
             k = 6 * self.fixed_index[p]
