@@ -21,8 +21,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "verif
 import sphere_wall_series as series  # noqa: E402
 
 OPTIONS = {
-    "seed: 3x3 Gauss": dict(adaptive_quadrature=False, contact_refinement=0.0),
-    "adaptive quadrature": dict(adaptive_quadrature=True, contact_refinement=0.0),
+    "seed: 3x3 Gauss": dict(quadrature_order=3, adaptive_quadrature=False, contact_refinement=0.0),
+    "adaptive 2x2 quadrature, no refinement": dict(adaptive_quadrature=True, contact_refinement=0.0),
     "default: adaptive + contact refinement": dict(adaptive_quadrature=True, contact_refinement=3.0),
     "default, float32 (GMRES tol 1e-6)": dict(adaptive_quadrature=True, contact_refinement=3.0,
                                              dtype="float32", tolerance=1e-6),
