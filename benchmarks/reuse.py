@@ -12,6 +12,7 @@ every N has the same elements per cell.
 
 import argparse
 import time
+import warnings
 
 import numpy as np
 
@@ -41,6 +42,7 @@ def run(n_fixed, reuse, solves, mesh, device="cpu"):
 
 
 def main():
+    warnings.simplefilter("ignore", wb.ContactResolutionWarning)  # refinement is off on purpose
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--counts", type=int, nargs="+", default=[1, 4, 16, 64])
     parser.add_argument("--solves", type=int, default=4)

@@ -15,12 +15,13 @@ default (adaptive) Warp operator is timed too.
 import argparse
 import resource
 import time
+import warnings
 
 import numpy as np
 
 import numpy_baseline
 from common import best_time, output, print_table, pyplot, write_csv
-from warpbem import Body, MobilitySolver, mesh, runtime
+from warpbem import Body, ContactResolutionWarning, MobilitySolver, mesh, runtime
 from warpbem.geometry import SurfaceGeometry
 from warpbem.operators import DoubleLayerOperator, QuadratureOptions
 
@@ -45,6 +46,7 @@ def cells(n):
 
 
 def main():
+    warnings.simplefilter("ignore", ContactResolutionWarning)  # refinement is off on purpose
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--counts", type=int, nargs="+", default=[1, 2, 8, 32, 128])
     parser.add_argument("--device", default="cpu")
