@@ -58,7 +58,7 @@ def main():
     rows = []
     for n in args.counts:
         bodies = cells(n)
-        geometry = SurfaceGeometry.from_bodies(bodies, 3, 1.0, True)
+        geometry = SurfaceGeometry.from_bodies(bodies, QuadratureOptions().order, 1.0, True)
         q = np.random.default_rng(n).standard_normal(3 * geometry.n_elements)
         matrix_gb = (3 * geometry.n_elements) ** 2 * 8 / 1e9
         row = dict(cells=n, elements=geometry.n_elements, matrix_GB=matrix_gb)
