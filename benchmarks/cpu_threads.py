@@ -24,7 +24,7 @@ def main():
     args = parser.parse_args()
     sphere = mesh.sphere(1.0, args.subdivisions)
     bodies = [Body(sphere, position=(3.0 * i, 0.0, 1.5)) for i in range(args.bodies)]
-    geometry = SurfaceGeometry.from_bodies(bodies, 3, 1.0, True)
+    geometry = SurfaceGeometry.from_bodies(bodies, QuadratureOptions().order, 1.0, True)
     q = np.random.default_rng(0).standard_normal(3 * geometry.n_elements)
     all_cores = runtime.cpu_threads()
     rows = []
