@@ -35,14 +35,22 @@ def test_two_body_mobility_is_reciprocal():
     assert np.linalg.eigvalsh(0.5 * (m + m.T)).min() > 0
 
 
-def test_fixed_and_free_formulations_agree():
-    """Hold a sphere in shear next to a free one; then free it and apply the holding load: it
-    must stay at rest, and its neighbour must move exactly as before."""
+@pytest.mark.parametrize("shape", ["sphere", "tilted spheroid, off-centre reference point"])
+def test_fixed_and_free_formulations_agree(shape):
+    """Hold a body in shear next to a free one; then free it and apply the holding load: it
+    must stay at rest, and its neighbour must move exactly as before. The spheroid case has no
+    symmetry left: tilted, its reference point off its centroid."""
     neighbour = wb.Body(SPHERE, position=(2.4, 0.5, 1.5))
-    held = wb.Body(SPHERE, position=(0.0, 0.0, 1.2), fixed=True)
+    mesh = SPHERE
+    orientation = (1.0, 0.0, 0.0, 0.0)
+    if shape != "sphere":
+        spheroid = wb.mesh.spheroid(1.0, 0.6, subdivisions=3)
+        mesh = wb.mesh.Mesh(spheroid.nodes + [0.2, -0.1, 0.05], spheroid.elements)
+        orientation = (0.9, 0.3, -0.2, 0.1)
+    held = wb.Body(mesh, position=(0.0, 0.0, 1.3), orientation=orientation, fixed=True)
     fixed = wb.solve_mobility([held, neighbour], shear_rate=1.0, viscosity=1.0, tolerance=1e-11)
-    free = wb.solve_mobility([wb.Body(SPHERE, position=(0.0, 0.0, 1.2)), neighbour], shear_rate=1.0,
-                             viscosity=1.0, forces=[fixed.force[0], [0, 0, 0]],
+    free = wb.solve_mobility([wb.Body(mesh, position=(0.0, 0.0, 1.3), orientation=orientation), neighbour],
+                             shear_rate=1.0, viscosity=1.0, forces=[fixed.force[0], [0, 0, 0]],
                              torques=[fixed.torque[0], [0, 0, 0]], tolerance=1e-11)
     scale = np.abs(fixed.velocity[1]).max()
     assert np.abs(free.velocity[0]).max() < 1e-3 * scale
