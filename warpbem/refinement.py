@@ -59,7 +59,8 @@ def _gaps(meshes, p, wall, ratio):
         # only bodies whose bounding spheres come within reach of a coarse element
         if np.linalg.norm(middle - other) > reach + np.linalg.norm(cloud - other, axis=1).max() + largest:
             continue
-        d = np.sqrt(((centres[:, None, :] - cloud[None, :, :]) ** 2).sum(axis=-1).min(axis=1))
+        d = np.concatenate([np.sqrt(((c[:, None, :] - cloud[None, :, :]) ** 2).sum(axis=-1).min(axis=1))
+                            for c in np.array_split(centres, max(1, len(centres) // 256))])  # bounded memory
         closer = d < gap
         gap[closer] = d[closer]
         neighbour[closer] = q
