@@ -343,7 +343,8 @@ class MobilitySolver:
                 f" the contact refinement resolves (contact_refinement={self.contact_refinement:g}): the"
                 " elements there are wider than a third of the gap. Squeeze-flow forces lose accuracy"
                 " first, and the error grows fast as the gap closes (README: stability map); finer"
-                " meshes or a larger contact_refinement help.",
+                " meshes or a larger contact_refinement help."
+                + (" In float32, GMRES stalls from about here: use dtype='float64'." if self.dtype == "float32" else ""),
                 ContactResolutionWarning, stacklevel=3)
 
 

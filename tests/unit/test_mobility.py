@@ -149,6 +149,12 @@ def test_unresolved_contacts_warn_once_naming_the_bodies():
     pair = [wb.Body(sphere, position=(0, 0, 3.0)), wb.Body(sphere, position=(2.005, 0, 3.0))]
     with pytest.warns(wb.ContactResolutionWarning, match="body 0 and body 1"):
         wb.solve_mobility(pair, shear_rate=1.0)
+    with pytest.warns(wb.ContactResolutionWarning, match="In float32, GMRES stalls"):
+        try:
+            wb.solve_mobility([wb.Body(sphere, position=(0, 0, 1.03))], shear_rate=1.0, dtype="float32",
+                              tolerance=1e-6)
+        except wb.ConvergenceError:
+            pass  # the stall the warning announces
     solver = wb.MobilitySolver(shear_rate=1.0)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
