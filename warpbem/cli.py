@@ -15,6 +15,12 @@ def main(argv=None) -> int:
     demo.add_argument("--device", default="cpu", help="Warp device, e.g. cpu or cuda:0 (default %(default)s)")
     demo.add_argument("--positions", type=int, default=25, help="streamwise positions (default %(default)s)")
     demo.add_argument("--no-plot", action="store_true", help="skip the PNG chart")
+    run = sub.add_parser("run", help="time-step a scene file, writing HDF5 frames")
+    run.add_argument("scene", nargs="?", help="scene file (TOML, see scenes/README.md)")
+    run.add_argument("--output", required=True, help="HDF5 file of frames")
+    run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a scene value")
+    run.add_argument("--device", default="cpu")
+    run.add_argument("--resume", action="store_true", help="continue the run in --output from its last frame")
     plot = sub.add_parser("plot", help="write the PNG chart of a demo HDF5 file")
     plot.add_argument("result", help="HDF5 file written by warpbem demo")
     plot.add_argument("--png", default=None, help="output PNG (default: beside the HDF5 file)")
@@ -37,6 +43,23 @@ def main(argv=None) -> int:
             return 130
         if not args.no_plot:
             print(f"chart: {plotting.plot_demo(output)}")
+        return 0
+    if args.command == "run":
+        from . import run as runner
+        from .scene import SceneError
+
+        if not args.resume and not args.scene:
+            parser.error("run needs a SCENE file (or --resume with --output)")
+        try:
+            runner.run(args.scene, args.output, args.set, args.device, args.resume,
+                       progress=lambda line: print(line, flush=True))
+        except SceneError as err:
+            print(f"warpbem run: {err}", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt:
+            print(f"interrupted: the frames so far are in {args.output}; continue with"
+                  f" warpbem run --resume --output {args.output}", file=sys.stderr)
+            return 130
         return 0
     print(f"chart: {plotting.plot_demo(args.result, args.png)}")
     return 0

@@ -30,8 +30,17 @@ class TableWriter:
     flushes the file.
     """
 
-    def __init__(self, path, columns: dict, scene: dict, device: str, seed=None, title: str = ""):
+    def __init__(self, path, columns: dict, scene: dict, device: str, seed=None, title: str = "",
+                 resume: bool = False):
         self.path = Path(path)
+        self.columns = columns
+        if resume:  # append to the frames already there
+            self.file = h5py.File(self.path, "a")
+            missing = [name for name in columns if name not in self.file]
+            if missing:
+                raise ValueError(f"{self.path}: cannot resume, the file has no dataset {missing[0]!r}")
+            self.rows = min(self.file[name].shape[0] for name in columns)
+            return
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.file = h5py.File(self.path, "w")
         attrs = self.file.attrs
@@ -42,7 +51,6 @@ class TableWriter:
         attrs["seed"] = "none (deterministic)" if seed is None else int(seed)
         attrs["created"] = datetime.now(timezone.utc).isoformat()
         attrs["units"] = "SI"
-        self.columns = columns
         for name, (unit, shape) in columns.items():
             ds = self.file.create_dataset(name, shape=(0, *shape), maxshape=(None, *shape), dtype="f8",
                                           chunks=(1, *shape) if shape else (64,))

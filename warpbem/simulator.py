@@ -67,17 +67,21 @@ class Simulator:
 
     def velocities(self, state: integrate.State):
         sol = self.solver.solve(self.bodies(state), forces=self.external_force)
+        self.last_solution = sol  # loads and GMRES figures of the latest solve, for the output
         return sol.velocity, sol.angular_velocity
 
     def smallest_gap(self, state: integrate.State) -> float:
-        """A cheap lower bound of the smallest gap: wall clearance of the lowest node, and
-        centre distance minus the bodies' outer radii for every pair."""
+        """A cheap lower bound of the smallest gap that can close: wall clearance of the lowest
+        node of each free body, and centre distance minus outer radii for every pair with a
+        free body in it (fixed bodies never close a gap between themselves)."""
         nodes = [b.world_nodes() for b in self.bodies(state)]
-        gap = min(n[:, 2].min() for n in nodes) if self.solver.wall else np.inf
+        free = ~self.fixed
+        gap = min((n[:, 2].min() for n, f in zip(nodes, free) if f), default=np.inf) if self.solver.wall else np.inf
         radii = [np.linalg.norm(n - p, axis=1).max() for n, p in zip(nodes, state.positions)]
         for i in range(len(nodes)):
             for j in range(i + 1, len(nodes)):
-                gap = min(gap, np.linalg.norm(state.positions[i] - state.positions[j]) - radii[i] - radii[j])
+                if free[i] or free[j]:
+                    gap = min(gap, np.linalg.norm(state.positions[i] - state.positions[j]) - radii[i] - radii[j])
         return max(float(gap), 0.0)
 
     def step(self, state: integrate.State):

@@ -1,0 +1,105 @@
+"""Scene files: validation messages name the field; runs write flushed frames and resume."""
+
+import json
+
+import h5py
+import numpy as np
+import pytest
+
+from warpbem import mesh, run, scene
+
+BASE = {
+    "flow": {"shear_rate": 0.0, "viscosity": 1e-3},
+    "physics": {"gravity": True},
+    "time": {"end": 0.6, "dt_max": 0.2, "dt_min": 0.05, "contact_gap": 1e-6},
+    "bodies": [{"position": [0.0, 0.0, 8e-6], "density": 1050.0,
+                "mesh": {"shape": "sphere", "radius": 5e-6, "subdivisions": 2}}],
+}
+
+
+def write(tmp_path, table):
+    lines = []
+
+    def emit(prefix, value):
+        return f"{prefix} = {json.dumps(value)}"
+
+    for key in ("flow", "physics", "time", "solver"):
+        if key in table:
+            lines.append(f"[{key}]")
+            lines += [emit(k, v) for k, v in table[key].items()]
+    for body in table.get("bodies", []):
+        lines.append("[[bodies]]")
+        for k, v in body.items():
+            if isinstance(v, dict):
+                lines.append(f"{k} = {{ " + ", ".join(emit(a, b) for a, b in v.items()) + " }")
+            else:
+                lines.append(emit(k, v))
+    path = tmp_path / "scene.toml"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda t: t["flow"].update(shear_rat=1.0), r"flow: unknown key 'shear_rat'"),
+    (lambda t: t["time"].pop("end"), r"time: missing required key 'end'"),
+    (lambda t: t["flow"].update(viscosity=-1.0), r"flow.viscosity: -1 is outside the allowed range \(0, 1000\]"),
+    (lambda t: t["bodies"][0]["mesh"].update(shape="cube"), r"bodies.0.mesh.shape: 'cube' is not one of"),
+    (lambda t: t["bodies"][0].update(position=[0.0, 1.0]), r"bodies.0.position: expected a list of 3 numbers"),
+    (lambda t: t["time"].update(dt_min=1.0), r"time.dt_min: 1 is outside the allowed range"),
+    (lambda t: t["bodies"][0]["mesh"].update(shape="file", path="missing.q9"), r"bodies.0.mesh.path: .*cannot read"),
+    (lambda t: t["bodies"].append(dict(t["bodies"][0], position=[1e-6, 0.0, 8e-6])), r"initial placement: bodies 0 and 1 overlap"),
+])
+def test_bad_scenes_name_the_field(tmp_path, change, message):
+    table = json.loads(json.dumps(BASE))
+    change(table)
+    with pytest.raises(scene.SceneError, match=message):
+        scene.load(write(tmp_path, table))
+
+
+def test_overrides_and_mesh_files(tmp_path):
+    table = json.loads(json.dumps(BASE))
+    mesh.save(mesh.spheroid(5e-6, 0.7, subdivisions=2), tmp_path / "cell.q9")
+    table["bodies"][0]["mesh"] = {"shape": "file", "path": "cell.q9"}
+    s = scene.load(write(tmp_path, table), ["flow.shear_rate=80", "bodies.0.position=[0.0, 2e-6, 9e-6]"])
+    assert s.shear_rate == 80.0 and s.bodies[0][2] == (0.0, 2e-6, 9e-6)
+    assert s.bodies[0][1].n_elements == 24
+    with pytest.raises(scene.SceneError, match="expected key=value"):
+        scene.load(write(tmp_path, table), ["flow.shear_rate"])
+
+
+def test_interrupted_run_resumes_to_the_same_end(tmp_path):
+    path = write(tmp_path, BASE)
+    straight = run.run(path, tmp_path / "straight.h5", progress=lambda line: None)
+
+    class Stop(Exception):
+        pass
+
+    frames = []
+
+    def interrupt(line):
+        frames.append(line)
+        if len(frames) == 2:
+            raise Stop
+
+    with pytest.raises(Stop):
+        run.run(path, tmp_path / "resumed.h5", progress=interrupt)
+    with h5py.File(tmp_path / "resumed.h5") as f:
+        assert f["time"].shape[0] == 2  # the frames written before the interruption are kept
+    resumed = run.run(None, tmp_path / "resumed.h5", resume=True, progress=lambda line: None)
+    np.testing.assert_allclose(resumed.positions, straight.positions, rtol=0, atol=1e-6 * 5e-6)
+    with h5py.File(tmp_path / "resumed.h5") as f, h5py.File(tmp_path / "straight.h5") as g:
+        np.testing.assert_allclose(f["time"][:], g["time"][:])
+        assert f["position"].attrs["unit"] == "m" and json.loads(f.attrs["scene"])["flow"]["viscosity"] == 1e-3
+        assert np.all(np.diff(f["position"][:, 0, 2]) < 0)  # the heavy cell sinks
+
+
+def test_cli_run_reports_bad_scenes_and_runs_good_ones(tmp_path, capsys):
+    from warpbem import cli
+
+    path = write(tmp_path, BASE)
+    assert cli.main(["run", str(path), "--output", str(tmp_path / "bad.h5"), "--set", "flow.viscosty=1"]) == 2
+    assert "flow: unknown key 'viscosty'" in capsys.readouterr().err
+    assert not (tmp_path / "bad.h5").exists()  # nothing written before the scene is valid
+    assert cli.main(["run", str(path), "--output", str(tmp_path / "good.h5")]) == 0
+    with h5py.File(tmp_path / "good.h5") as f:
+        assert f["time"][-1] == pytest.approx(0.6) and f["force"].shape[1:] == (1, 3)
