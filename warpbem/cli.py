@@ -21,8 +21,8 @@ def main(argv=None) -> int:
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a scene value")
     run.add_argument("--device", default="cpu")
     run.add_argument("--resume", action="store_true", help="continue the run in --output from its last frame")
-    plot = sub.add_parser("plot", help="write the PNG chart of a demo HDF5 file")
-    plot.add_argument("result", help="HDF5 file written by warpbem demo")
+    plot = sub.add_parser("plot", help="write the PNG chart of a run or demo HDF5 file")
+    plot.add_argument("result", help="HDF5 file written by warpbem run or warpbem demo")
     plot.add_argument("--png", default=None, help="output PNG (default: beside the HDF5 file)")
     args = parser.parse_args(argv)
 
@@ -61,7 +61,7 @@ def main(argv=None) -> int:
                   f" warpbem run --resume --output {args.output}", file=sys.stderr)
             return 130
         return 0
-    print(f"chart: {plotting.plot_demo(args.result, args.png)}")
+    print(f"chart: {plotting.plot(args.result, args.png)}")
     return 0
 
 

@@ -55,3 +55,42 @@ def plot_demo(h5_path, png_path=None) -> Path:
     fig.savefig(png_path, dpi=120)
     plt.close(fig)
     return png_path
+
+
+def plot_run(h5_path, png_path=None) -> Path:
+    """Trajectories of a ``warpbem run`` file, like the thesis figures: height Z(t), lateral
+    position Y(t) and the X-Z path of every free body (fixed bodies drawn as their start)."""
+    import json
+
+    plt = _pyplot()
+    h5_path = Path(h5_path)
+    png_path = Path(png_path) if png_path else h5_path.with_suffix(".png")
+    with h5py.File(h5_path, "r") as f:
+        t = f["time"][:]
+        pos = f["position"][:] * 1e6
+        names = json.loads(f.attrs.get("body_names", "[]")) or [f"body {i}" for i in range(pos.shape[1])]
+        moved = np.ptp(pos, axis=0).max(axis=1) > 0
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
+    for i, name in enumerate(names):
+        style = "-" if moved[i] else ":"
+        axes[0].plot(t, pos[:, i, 2], style, label=name)
+        axes[1].plot(t, pos[:, i, 1], style, label=name)
+        axes[2].plot(pos[:, i, 0], pos[:, i, 2], style + ("o" if not moved[i] else ""), label=name)
+    axes[0].set(xlabel="t [s]", ylabel="Z: centre height [um]")
+    axes[1].set(xlabel="t [s]", ylabel="Y: lateral position [um]")
+    axes[2].set(xlabel="X [um]", ylabel="Z [um]", title="X-Z trajectory")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(h5_path.name)
+    fig.tight_layout()
+    fig.savefig(png_path, dpi=120)
+    plt.close(fig)
+    return png_path
+
+
+def plot(h5_path, png_path=None) -> Path:
+    """Chart of any warpbem result file: a run's trajectories or the demo's velocities."""
+    with h5py.File(h5_path, "r") as f:
+        is_run = "position" in f
+    return plot_run(h5_path, png_path) if is_run else plot_demo(h5_path, png_path)

@@ -61,6 +61,12 @@ def run(scene_path, output, overrides=(), device="cpu", resume=False, progress=p
         writer.file.attrs["body_names"] = json.dumps([b[0] for b in scene.bodies])
     start, steps, t0 = time.perf_counter(), 0, state.time
     with writer:
+        if not resume:  # frame 0: the initial state and its velocities
+            u, w = sim.velocities(state)
+            sol = sim.last_solution
+            writer.append(time=state.time, dt=0.0, position=state.positions, orientation=state.orientations,
+                          velocity=u, angular_velocity=w, force=sol.force, torque=sol.torque,
+                          gmres_iterations=sol.iterations, gmres_residual=sol.residual)
         while state.time < scene.end * (1 - 1e-12):
             state, motion, dt = sim.step(state)
             steps += 1

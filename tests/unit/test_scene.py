@@ -84,7 +84,7 @@ def test_interrupted_run_resumes_to_the_same_end(tmp_path):
     with pytest.raises(Stop):
         run.run(path, tmp_path / "resumed.h5", progress=interrupt)
     with h5py.File(tmp_path / "resumed.h5") as f:
-        assert f["time"].shape[0] == 2  # the frames written before the interruption are kept
+        assert f["time"].shape[0] == 3  # frame 0 and the two frames written before the interruption
     resumed = run.run(None, tmp_path / "resumed.h5", resume=True, progress=lambda line: None)
     np.testing.assert_allclose(resumed.positions, straight.positions, rtol=0, atol=1e-6 * 5e-6)
     with h5py.File(tmp_path / "resumed.h5") as f, h5py.File(tmp_path / "straight.h5") as g:
@@ -102,4 +102,7 @@ def test_cli_run_reports_bad_scenes_and_runs_good_ones(tmp_path, capsys):
     assert not (tmp_path / "bad.h5").exists()  # nothing written before the scene is valid
     assert cli.main(["run", str(path), "--output", str(tmp_path / "good.h5")]) == 0
     with h5py.File(tmp_path / "good.h5") as f:
-        assert f["time"][-1] == pytest.approx(0.6) and f["force"].shape[1:] == (1, 3)
+        assert f["time"][0] == 0.0 and f["time"][-1] == pytest.approx(0.6) and f["force"].shape[1:] == (1, 3)
+    pytest.importorskip("matplotlib")  # the plot extra
+    assert cli.main(["plot", str(tmp_path / "good.h5")]) == 0
+    assert (tmp_path / "good.png").stat().st_size > 10_000
