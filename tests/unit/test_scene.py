@@ -103,6 +103,23 @@ def test_cli_run_reports_bad_scenes_and_runs_good_ones(tmp_path, capsys):
     assert cli.main(["run", str(path), "--output", str(tmp_path / "good.h5")]) == 0
     with h5py.File(tmp_path / "good.h5") as f:
         assert f["time"][0] == 0.0 and f["time"][-1] == pytest.approx(0.6) and f["force"].shape[1:] == (1, 3)
-    pytest.importorskip("matplotlib")  # the plot extra
     assert cli.main(["plot", str(tmp_path / "good.h5")]) == 0
     assert (tmp_path / "good.png").stat().st_size > 10_000
+
+
+@pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")  # the adherent cell, as in the README
+def test_demo_writes_units_and_metadata_and_a_chart(tmp_path):
+    """The main job on two positions: HDF5 with units, scene, versions and seed, and its PNG."""
+    from warpbem import cli
+
+    out = tmp_path / "demo.h5"
+    assert cli.main(["demo", "--output", str(out), "--positions", "2"]) == 0
+    with h5py.File(out) as f:
+        assert f["free_velocity"].shape == (2, 3) and f["free_velocity"].attrs["unit"] == "m/s"
+        assert f["adherent_force"].attrs["unit"] == "N"
+        assert json.loads(f.attrs["versions"])["warpbem"] == "0.1.0" and f.attrs["seed"]
+        assert json.loads(f.attrs["scene"])["shear_rate"] == 100.0
+        # symmetric pass: the lateral velocity at x = -30 um mirrors the one at +30 um
+        v = f["free_velocity"][:, 1]
+        assert v[0] > 0 and np.isclose(v[0], -v[1], rtol=1e-6)
+    assert (tmp_path / "demo.png").stat().st_size > 10_000
