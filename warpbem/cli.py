@@ -21,6 +21,12 @@ def main(argv=None) -> int:
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a scene value")
     run.add_argument("--device", default="cpu")
     run.add_argument("--resume", action="store_true", help="continue the run in --output from its last frame")
+    sweep = sub.add_parser("sweep", help="run a scene over a grid of values (one HDF5 per point, summary.csv)")
+    sweep.add_argument("scene")
+    sweep.add_argument("--vary", action="append", required=True, metavar="KEY=V1,V2,...")
+    sweep.add_argument("--output-dir", required=True)
+    sweep.add_argument("--workers", type=int, default=1, help="local processes (default %(default)s)")
+    sweep.add_argument("--device", default="cpu")
     plot = sub.add_parser("plot", help="write the PNG chart of a run or demo HDF5 file")
     plot.add_argument("result", help="HDF5 file written by warpbem run or warpbem demo")
     plot.add_argument("--png", default=None, help="output PNG (default: beside the HDF5 file)")
@@ -60,6 +66,18 @@ def main(argv=None) -> int:
             print(f"interrupted: the frames so far are in {args.output}; continue with"
                   f" warpbem run --resume --output {args.output}", file=sys.stderr)
             return 130
+        return 0
+    if args.command == "sweep":
+        from .scene import SceneError
+        from .sweep import sweep as run_sweep
+
+        try:
+            summary = run_sweep(args.scene, args.vary, args.output_dir, args.device, args.workers,
+                                progress=lambda line: print(line, flush=True))
+        except SceneError as err:
+            print(f"warpbem sweep: {err}", file=sys.stderr)
+            return 2
+        print(f"summary: {summary}")
         return 0
     print(f"chart: {plotting.plot(args.result, args.png)}")
     return 0
