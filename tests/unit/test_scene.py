@@ -159,3 +159,14 @@ def test_sweep_in_worker_processes_matches_serial(tmp_path):
     a = [float(r["body0_dz_m"]) for r in csv.DictReader(serial.open())]
     b = [float(r["body0_dz_m"]) for r in csv.DictReader(parallel.open())]
     assert a == b and a[0] < 0
+
+
+def test_every_shipped_scene_is_valid():
+    from pathlib import Path
+
+    folder = Path(__file__).resolve().parents[2] / "scenes"
+    files = sorted(folder.glob("*.toml"))
+    assert len(files) >= 2
+    for path in files:
+        s = scene.load(path)
+        assert s.end > 0 and len(s.bodies) >= 1
