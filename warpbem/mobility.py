@@ -256,7 +256,10 @@ class MobilitySolver:
         self._last = None  # (CompletedDoubleLayer, solution vector, speed) of the previous solve
         self._warned = set()  # contacts already reported by this solver
 
-    def solve(self, bodies, forces=None, torques=None, initial_guess=None) -> MobilitySolution:
+    def solve(self, bodies, forces=None, torques=None, initial_guess=None,
+              check_placement_first: bool = True) -> MobilitySolution:
+        """Solve for the bodies of the moment. ``check_placement_first=False`` skips the overlap
+        and wall checks, for callers that have just checked these very bodies (time stepping)."""
         bodies = list(bodies)
         if not bodies:
             raise ValueError("bodies must contain at least one Body")
@@ -265,7 +268,8 @@ class MobilitySolver:
                 raise TypeError(f"bodies[{i}] must be a warpbem.Body, got {type(b).__name__}")
         forces = _load_array("forces", forces, bodies)
         torques = _load_array("torques", torques, bodies)
-        check_placement(bodies, self.wall)
+        if check_placement_first:
+            check_placement(bodies, self.wall)
 
         length = float(np.mean([b.mesh.equivalent_radius() for b in bodies]))
         fixed = np.array([b.fixed for b in bodies])

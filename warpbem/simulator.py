@@ -52,6 +52,7 @@ class Simulator:
         if scheme not in integrate.SCHEMES:
             raise ValueError(f"scheme must be one of {integrate.SCHEMES}, got {scheme!r}")
         self.solver = solver
+        self._accepted = None  # the state the last step returned, placement already checked
         self.scheme = scheme
         self.policy = policy
         densities = np.full(len(self.meshes), fluid_density) if densities is None else np.asarray(densities, float)
@@ -65,8 +66,10 @@ class Simulator:
         return [Body(m, position=p, orientation=q, fixed=bool(f))
                 for m, p, q, f in zip(self.meshes, state.positions, state.orientations, self.fixed)]
 
-    def velocities(self, state: integrate.State):
-        sol = self.solver.solve(self.bodies(state), forces=self.external_force)
+    def velocities(self, state: integrate.State, checked: bool = False):
+        """(U, Omega) of every body; ``checked``: the placement of ``state`` is known valid."""
+        sol = self.solver.solve(self.bodies(state), forces=self.external_force,
+                                check_placement_first=not checked)
         self.last_solution = sol  # loads and GMRES figures of the latest solve, for the output
         return sol.velocity, sol.angular_velocity
 
@@ -85,18 +88,30 @@ class Simulator:
         return max(float(gap), 0.0)
 
     def step(self, state: integrate.State):
-        """One adaptive step; returns (new state, (U, Omega), dt)."""
+        """One adaptive step; returns (new state, (U, Omega), dt).
+
+        The velocities at ``state`` are computed once, even when the step is retried, and
+        without a second placement check if ``state`` is the one this simulator just returned.
+        A step whose predictor or result would make bodies touch is retried at half the size.
+        """
         dt = self.policy.dt(self.smallest_gap(state))
+        start = self.velocities(state, checked=state is self._accepted)
+
+        def velocities(s):
+            return start if s is state else self.velocities(s)
+
         while True:
-            new, motion = integrate.step(state, self.velocities, dt, self.scheme)
             try:
+                new, motion = integrate.step(state, velocities, dt, self.scheme)
                 check_placement(self.bodies(new), self.solver.wall)
-                return new, motion, dt
             except PlacementError as err:
                 if dt <= self.policy.dt_min * (1 + 1e-12):
                     raise PlacementError(f"at t = {state.time:.6g} s even the smallest step dt_min ="
                                          f" {self.policy.dt_min:g} s makes bodies touch: {err}") from err
                 dt = max(0.5 * dt, self.policy.dt_min)
+                continue
+            self._accepted = new
+            return new, motion, dt
 
     def run(self, state: integrate.State, t_end: float, callback=None) -> integrate.State:
         """Step until t_end; ``callback(state, motion, dt)`` after each step."""

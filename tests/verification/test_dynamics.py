@@ -101,3 +101,21 @@ def test_heavy_cell_settles_at_brenners_speed_and_the_step_shrinks():
     np.testing.assert_allclose(w, expected, rtol=0.02)
     assert z.min() > a and np.all(np.diff(z) < 0)  # sinking, never touching
     assert dt[-1] < dt[0]  # the step shrank near the wall
+
+
+@pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")  # it ends up close, on purpose
+def test_a_step_that_would_cross_the_wall_is_retried_shorter():
+    """A cell pushed hard at the wall with a step far too long for it: the Heun predictor (or
+    the step's end) would cross the wall, so the step is halved until it does not, and the cell
+    never touches. Too short a dt_min to ever allow that is an error that says so."""
+    a = 5e-6
+    solver = wb.MobilitySolver(viscosity=1e-3)
+    sim = Simulator([wb.mesh.sphere(a, 2)], [False], solver, gravity=9.81, densities=[1.0e5],
+                    policy=StepPolicy(dt_max=5.0, dt_min=1e-3, contact_gap=1e-9))
+    state = State(0.0, np.array([[0.0, 0.0, 1.4 * a]]), np.array([[1.0, 0, 0, 0]]))
+    new, motion, dt = sim.step(state)
+    assert dt < 5.0 and new.positions[0, 2] > a
+    stiff = Simulator([wb.mesh.sphere(a, 2)], [False], solver, gravity=9.81, densities=[1.0e5],
+                      policy=StepPolicy(dt_max=5.0, dt_min=5.0, contact_gap=1e-9))
+    with pytest.raises(wb.PlacementError, match="even the smallest step"):
+        stiff.step(state)
