@@ -28,6 +28,13 @@ def _columns(n):
     }
 
 
+def _write_frame(writer, state, motion, dt, solution):
+    """One HDF5 frame: the state, the motion that led to it and the latest solve's loads."""
+    writer.append(time=state.time, dt=dt, position=state.positions, orientation=state.orientations,
+                  velocity=motion[0], angular_velocity=motion[1], force=solution.force, torque=solution.torque,
+                  gmres_iterations=solution.iterations, gmres_residual=solution.residual)
+
+
 def build(scene: scenes.Scene, device="cpu") -> Simulator:
     solver = MobilitySolver(scene.shear_rate, scene.viscosity, scene.wall, device,
                             quadrature_order=scene.quadrature_order, tolerance=scene.tolerance,
@@ -62,19 +69,13 @@ def run(scene_path, output, overrides=(), device="cpu", resume=False, progress=p
     start, steps, t0 = time.perf_counter(), 0, state.time
     with writer:
         if not resume:  # frame 0: the initial state and its velocities
-            u, w = sim.velocities(state)
-            sol = sim.last_solution
-            writer.append(time=state.time, dt=0.0, position=state.positions, orientation=state.orientations,
-                          velocity=u, angular_velocity=w, force=sol.force, torque=sol.torque,
-                          gmres_iterations=sol.iterations, gmres_residual=sol.residual)
+            _write_frame(writer, state, sim.velocities(state), 0.0, sim.last_solution)
         while state.time < scene.end * (1 - 1e-12):
             state, motion, dt = sim.step(state)
             steps += 1
             if steps % scene.frame_every == 0 or state.time >= scene.end * (1 - 1e-12):
                 sol = sim.last_solution
-                writer.append(time=state.time, dt=dt, position=state.positions, orientation=state.orientations,
-                              velocity=motion[0], angular_velocity=motion[1], force=sol.force, torque=sol.torque,
-                              gmres_iterations=sol.iterations, gmres_residual=sol.residual)
+                _write_frame(writer, state, motion, dt, sol)
                 elapsed = time.perf_counter() - start
                 rate = (state.time - t0) / elapsed
                 eta = (scene.end - state.time) / rate if rate > 0 else float("inf")
