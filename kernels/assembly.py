@@ -23,13 +23,8 @@ from types import SimpleNamespace
 
 import warp as wp
 
+from .elements import make_element_functions
 from .greens import make_green_functions
-
-# (s, t) index (0, 1, 2 for -1, 0, 1) of each QUAD9 node, in the order of
-# warpbem.quad9.REFERENCE_NODES: corners 0-3 counter-clockwise, mid-edges 4-7, centre 8
-_NODE_INDEX = wp.types.vector(9, wp.int32)
-NODE_S = wp.constant(_NODE_INDEX(0, 2, 2, 0, 1, 2, 1, 0, 1))
-NODE_T = wp.constant(_NODE_INDEX(0, 0, 2, 2, 0, 1, 2, 1, 1))
 
 
 @functools.lru_cache(maxsize=None)
@@ -37,42 +32,7 @@ def build_kernels(dtype, wall: bool) -> SimpleNamespace:
     g = make_green_functions(dtype, wall)
     vec3, mat33 = g.vec3, g.mat33
 
-    @wp.func
-    def lagrange(u: dtype, node: int):
-        # quadratic Lagrange basis on the nodes -1, 0, 1 (index node = 0, 1, 2)
-        half = dtype(0.5)
-        one = dtype(1.0)
-        if node == 0:
-            return half * u * (u - one)
-        if node == 1:
-            return one - u * u
-        return half * u * (u + one)
-
-    @wp.func
-    def lagrange_slope(u: dtype, node: int):
-        half = dtype(0.5)
-        if node == 0:
-            return u - half
-        if node == 1:
-            return dtype(-2.0) * u
-        return u + half
-
-    @wp.func
-    def quad9_point(nodes: wp.array(dtype=vec3), element: int, s: dtype, t: dtype):
-        """Position and x_s x x_t (outward normal times Jacobian) at (s, t) of an element."""
-        x = vec3()
-        xs = vec3()
-        xt = vec3()
-        for a in range(9):
-            p = nodes[element * 9 + a]
-            i = NODE_S[a]
-            j = NODE_T[a]
-            ls = lagrange(s, i)
-            lt = lagrange(t, j)
-            x += p * (ls * lt)
-            xs += p * (lagrange_slope(s, i) * lt)
-            xt += p * (ls * lagrange_slope(t, j))
-        return x, wp.cross(xs, xt)
+    quad9_point = make_element_functions(dtype).quad9_point
 
     @wp.struct
     class Surface:

@@ -253,13 +253,18 @@ class MobilitySolver:
         self.operator = operator
         self.contact_refinement = _finite("contact_refinement", contact_refinement)
         self.reuse = bool(reuse)
-        self._last = None  # (CompletedDoubleLayer, solution vector, speed) of the previous solve
+        self._last = None  # (CompletedDoubleLayer, solution vector, speed, bodies key) of the previous solve
         self._warned = set()  # contacts already reported by this solver
 
     def solve(self, bodies, forces=None, torques=None, initial_guess=None,
-              check_placement_first: bool = True) -> MobilitySolution:
+              check_placement_first: bool = True, background: bool = True) -> MobilitySolution:
         """Solve for the bodies of the moment. ``check_placement_first=False`` skips the overlap
-        and wall checks, for callers that have just checked these very bodies (time stepping)."""
+        and wall checks, for callers that have just checked these very bodies (time stepping).
+
+        ``background=False`` gives the response to the loads alone (no shear flow, fixed bodies
+        at rest), e.g. the mobility of a contact for an implicit contact force; such a solve
+        reuses the whole system of a preceding solve of the same bodies and leaves the warm
+        start of the next ordinary solve alone."""
         bodies = list(bodies)
         if not bodies:
             raise ValueError("bodies must contain at least one Body")
@@ -279,18 +284,26 @@ class MobilitySolver:
         speed = speed if speed > 0 else 1.0
         force_scale = self.viscosity * speed * length  # N per scaled force unit
 
+        if not background:
+            prescribed[:] = 0.0
         previous = self._last[0] if self.reuse and self._last else None
-        geometry = SurfaceGeometry.from_bodies(bodies, self.quadrature.order, length, self.wall,
-                                               self.contact_refinement)
-        self._warn_unresolved(geometry, length)
-        double_layer = DoubleLayerOperator(geometry, self.wall, self.quadrature, self.dtype, self.device,
-                                           self.operator, reuse=previous.operator if previous else None)
-        system = CompletedDoubleLayer(geometry, double_layer, fixed, previous)
+        key = [(id(b.mesh), b.position.tobytes(), b.orientation.tobytes(), b.fixed) for b in bodies]
+        if previous is not None and key == self._last[3]:  # the very same bodies: keep the system
+            system = previous
+            geometry, double_layer = system.geometry, system.operator
+        else:
+            geometry = SurfaceGeometry.from_bodies(bodies, self.quadrature.order, length, self.wall,
+                                                   self.contact_refinement)
+            self._warn_unresolved(geometry, length)
+            double_layer = DoubleLayerOperator(geometry, self.wall, self.quadrature, self.dtype, self.device,
+                                               self.operator, reuse=previous.operator if previous else None)
+            system = CompletedDoubleLayer(geometry, double_layer, fixed, previous)
 
         rhs = np.zeros(system.size)
         xi = geometry.collocation
         ambient = np.zeros_like(xi)
-        ambient[:, 0] = self.shear_rate * length / speed * xi[:, 2]
+        if background:
+            ambient[:, 0] = self.shear_rate * length / speed * xi[:, 2]
         rhs[:] = -ambient.ravel()
         free_poles, free_forces = [], []
         for p in np.flatnonzero(~fixed):
@@ -308,13 +321,14 @@ class MobilitySolver:
         if initial_guess is not None and np.shape(initial_guess) != (system.size,):
             raise ValueError(f"initial_guess must have shape ({system.size},) for this scene, got"
                              f" {np.shape(initial_guess)} (the mesh or the bodies changed)")
-        if initial_guess is None and previous is not None:
+        if initial_guess is None and previous is not None and background:
             # the previous solution is in the previous scaling: rescale the loads part with it
             initial_guess = system.initial_guess(previous, self._last[1] * (self._last[2] / speed))
         result = gmres(system.linear_operator(), rhs, tolerance=self.tolerance,
                        max_iterations=self.max_iterations, initial_guess=initial_guess)
         x = result.solution
-        self._last = (system, x, speed)
+        if background or self._last is None or system is not self._last[0]:
+            self._last = (system, x, speed, key)
 
         velocity = np.zeros((len(bodies), 3))
         angular_velocity = np.zeros((len(bodies), 3))

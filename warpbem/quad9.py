@@ -9,7 +9,7 @@ so that x_s x x_t points out of the body):
     |           |
     0 --- 4 --- 1
 
-The device copy of the same map, used by the adaptive quadrature, is ``kernels/elements.py``;
+The device copy of the same map (with second derivatives) is ``kernels/elements.py``;
 ``tests/unit/test_quad9.py`` checks that the two agree.
 """
 

@@ -25,23 +25,28 @@ def _columns(n):
         "velocity": ("m/s", (n, 3)), "angular_velocity": ("rad/s", (n, 3)),
         "force": ("N (given on free bodies, holding load on fixed ones)", (n, 3)), "torque": ("N m", (n, 3)),
         "gmres_iterations": ("1", ()), "gmres_residual": ("1", ()),
+        "closest_gap": ("m (smallest surface gap of a free body to another body or the wall)", ()),
     }
 
 
-def _write_frame(writer, state, motion, dt, solution):
-    """One HDF5 frame: the state, the motion that led to it and the latest solve's loads."""
+def _write_frame(writer, sim, state, motion, dt):
+    """One HDF5 frame: the state, the motion that led to it and the latest solve's loads
+    (external and repulsive on free bodies, holding loads on fixed ones)."""
+    solution = sim.last_solution
     writer.append(time=state.time, dt=dt, position=state.positions, orientation=state.orientations,
                   velocity=motion[0], angular_velocity=motion[1], force=solution.force, torque=solution.torque,
-                  gmres_iterations=solution.iterations, gmres_residual=solution.residual)
+                  gmres_iterations=solution.iterations, gmres_residual=solution.residual,
+                  closest_gap=sim.closest_gap(state))
 
 
 def build(scene: scenes.Scene, device="cpu") -> Simulator:
     solver = MobilitySolver(scene.shear_rate, scene.viscosity, scene.wall, device,
                             quadrature_order=scene.quadrature_order, tolerance=scene.tolerance,
                             contact_refinement=scene.contact_refinement)
-    _, _, densities = scenes.body_arrays(scene)
+    _, _, densities, forces, torques = scenes.body_arrays(scene)
     return Simulator([b[1] for b in scene.bodies], [b[4] for b in scene.bodies], solver,
-                     densities=densities, fluid_density=scene.fluid_density,
+                     densities=densities, fluid_density=scene.fluid_density, forces=forces, torques=torques,
+                     repulsion=scene.repulsion,
                      gravity=STANDARD_GRAVITY if scene.gravity else 0.0, scheme=scene.scheme,
                      policy=StepPolicy(scene.dt_max, scene.dt_min, scene.contact_gap))
 
@@ -58,7 +63,7 @@ def run(scene_path, output, overrides=(), device="cpu", resume=False, progress=p
         scene = scenes.parse(stored, folder)
     else:
         scene = scenes.load(scene_path, overrides)
-        positions, orientations, _ = scenes.body_arrays(scene)
+        positions, orientations = scenes.body_arrays(scene)[:2]
         state = State(0.0, positions, orientations)
     sim = build(scene, device)
     n = len(scene.bodies)
@@ -69,13 +74,13 @@ def run(scene_path, output, overrides=(), device="cpu", resume=False, progress=p
     start, steps, t0 = time.perf_counter(), 0, state.time
     with writer:
         if not resume:  # frame 0: the initial state and its velocities
-            _write_frame(writer, state, sim.velocities(state), 0.0, sim.last_solution)
+            _write_frame(writer, sim, state, sim.velocities(state), 0.0)
         while state.time < scene.end * (1 - 1e-12):
             state, motion, dt = sim.step(state)
             steps += 1
             if steps % scene.frame_every == 0 or state.time >= scene.end * (1 - 1e-12):
                 sol = sim.last_solution
-                _write_frame(writer, state, motion, dt, sol)
+                _write_frame(writer, sim, state, motion, dt)
                 elapsed = time.perf_counter() - start
                 rate = (state.time - t0) / elapsed
                 eta = (scene.end - state.time) / rate if rate > 0 else float("inf")

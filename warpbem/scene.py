@@ -3,12 +3,16 @@ field's dotted name and the allowed values or range. Lengths in metres, times in
 viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
 
     [flow]                      shear_rate = 100.0, viscosity = 1.2e-3, wall = true
-    [physics]                   gravity = false, fluid_density = 1000.0
+    [physics]                   gravity = false, fluid_density = 1000.0, repulsion = false
+    [repulsion]                 coefficient = 1e-12 (F0, J), inverse_length = 2e9 (tau, 1/m),
+                                cell_roughness = 175e-9, wall_roughness = 50e-9 (thesis eq. 3.1;
+                                the unit convention of F0 is explained in warpbem/repulsion.py)
     [time]                      end = 0.01, dt_max = 1e-4, dt_min = 1e-5, contact_gap = 5e-7,
                                 scheme = "heun", frame_every = 10
     [solver]                    quadrature_order = 2, contact_refinement = 3.0, tolerance = 1e-8
     [[bodies]]                  name, position = [x, y, z], orientation = [w, x, y, z],
-                                fixed = false, density = 1000.0, and a mesh:
+                                fixed = false, density = 1000.0, force = [0, 0, 0] (N),
+                                torque = [0, 0, 0] (N m) on free bodies, and a mesh:
     [bodies.mesh]               shape = "sphere" (radius, subdivisions) | "spheroid" (radius,
                                 aspect_ratio, subdivisions) | "file" (path, relative to the scene)
 
@@ -29,6 +33,7 @@ import numpy as np
 
 from . import mesh as meshes
 from .body import Body
+from .repulsion import Repulsion
 
 
 class SceneError(ValueError):
@@ -75,12 +80,13 @@ class Scene:
     """A validated scene; ``raw`` keeps the checked table for the output file."""
 
     raw: dict
-    bodies: tuple  # (name, Mesh, position, orientation, fixed, density)
+    bodies: tuple  # (name, Mesh, position, orientation, fixed, density, force, torque)
     shear_rate: float
     viscosity: float
     wall: bool
     gravity: bool
     fluid_density: float
+    repulsion: Repulsion | None
     end: float
     dt_max: float
     dt_min: float
@@ -92,7 +98,7 @@ class Scene:
     tolerance: float
 
     def initial_bodies(self) -> list[Body]:
-        return [Body(m, position=p, orientation=q, fixed=f) for _, m, p, q, f, _ in self.bodies]
+        return [Body(b[1], position=b[2], orientation=b[3], fixed=b[4]) for b in self.bodies]
 
 
 def _mesh(where, spec, folder: Path):
@@ -115,9 +121,11 @@ def _mesh(where, spec, folder: Path):
 
 def parse(table: dict, folder: Path = Path(".")) -> Scene:
     """Validate a scene table (as read from TOML) and build the Scene."""
-    _table("scene", table, {"flow", "physics", "time", "solver", "bodies"}, ("flow", "time", "bodies"))
+    _table("scene", table, {"flow", "physics", "repulsion", "time", "solver", "bodies"}, ("flow", "time", "bodies"))
     flow = _table("flow", table["flow"], {"shear_rate", "viscosity", "wall"}, ("shear_rate",))
-    physics = _table("physics", table.get("physics", {}), {"gravity", "fluid_density"})
+    physics = _table("physics", table.get("physics", {}), {"gravity", "fluid_density", "repulsion"})
+    repulsion = _table("repulsion", table.get("repulsion", {}),
+                       {"coefficient", "inverse_length", "cell_roughness", "wall_roughness"})
     time = _table("time", table["time"], {"end", "dt_max", "dt_min", "contact_gap", "scheme", "frame_every"}, ("end",))
     solver = _table("solver", table.get("solver", {}), {"quadrature_order", "contact_refinement", "tolerance"})
     if not isinstance(table["bodies"], list) or not table["bodies"]:
@@ -125,12 +133,15 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
     bodies = []
     for i, spec in enumerate(table["bodies"]):
         where = f"bodies.{i}"
-        _table(where, spec, {"name", "mesh", "position", "orientation", "fixed", "density"}, ("mesh", "position"))
+        _table(where, spec, {"name", "mesh", "position", "orientation", "fixed", "density", "force", "torque"},
+               ("mesh", "position"))
         bodies.append((str(spec.get("name", f"body{i}")), _mesh(f"{where}.mesh", spec["mesh"], folder),
                        _vector(f"{where}.position", spec["position"], 3),
                        _vector(f"{where}.orientation", spec.get("orientation", [1.0, 0, 0, 0]), 4),
                        _bool(f"{where}.fixed", spec.get("fixed", False)),
-                       _number(f"{where}.density", spec.get("density", 1000.0), 100.0, 1e5)))
+                       _number(f"{where}.density", spec.get("density", 1000.0), 100.0, 1e5),
+                       _vector(f"{where}.force", spec.get("force", [0.0, 0.0, 0.0]), 3),
+                       _vector(f"{where}.torque", spec.get("torque", [0.0, 0.0, 0.0]), 3)))
     dt_max = _number("time.dt_max", time.get("dt_max", 1e-4), 0, 10, low_open=True)
     dt_min = _number("time.dt_min", time.get("dt_min", min(1e-5, dt_max)), 0, dt_max, low_open=True)
     scheme = time.get("scheme", "heun")
@@ -143,6 +154,12 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
         wall=_bool("flow.wall", flow.get("wall", True)),
         gravity=_bool("physics.gravity", physics.get("gravity", False)),
         fluid_density=_number("physics.fluid_density", physics.get("fluid_density", 1000.0), 100.0, 1e5),
+        repulsion=Repulsion(
+            _number("repulsion.coefficient", repulsion.get("coefficient", 1e-12), 0, 1, low_open=True),
+            _number("repulsion.inverse_length", repulsion.get("inverse_length", 2e9), 0, 1e12, low_open=True),
+            _number("repulsion.cell_roughness", repulsion.get("cell_roughness", 175e-9), 0, 1e-5),
+            _number("repulsion.wall_roughness", repulsion.get("wall_roughness", 50e-9), 0, 1e-5),
+        ) if _bool("physics.repulsion", physics.get("repulsion", False)) else None,
         end=_number("time.end", time["end"], 0, 1e6, low_open=True), dt_max=dt_max, dt_min=dt_min,
         contact_gap=_number("time.contact_gap", time.get("contact_gap", 5e-7), 0, 1e-2, low_open=True),
         scheme=scheme, frame_every=_number("time.frame_every", time.get("frame_every", 1), 1, 1e9, integer=True),
@@ -193,10 +210,33 @@ def load(path, overrides=()) -> Scene:
         check_placement(scene.initial_bodies(), scene.wall)
     except PlacementError as err:
         raise SceneError(f"{path}: initial placement: {err}") from err
+    if scene.repulsion is not None:
+        _check_roughness(scene)
     return scene
 
 
+def _check_roughness(scene: Scene):
+    """With repulsion on, the roughness layers of a free body must not start in contact
+    (thesis eq. 3.1 diverges there)."""
+    from .contact import WALL, GapFinder
+
+    bodies, finder, rep = scene.initial_bodies(), GapFinder(), scene.repulsion
+    outer = [np.linalg.norm(b.mesh.nodes, axis=1).max() for b in bodies]
+    for i, body in enumerate(bodies):
+        if body.fixed:
+            continue
+        others = [WALL] if scene.wall else []
+        others += [j for j in range(len(bodies)) if j != i
+                   and np.linalg.norm(body.position - bodies[j].position) - outer[i] - outer[j] < 1e-6]
+        for j in others:
+            gap = finder.between(bodies, i, j).distance
+            if rep.separation(gap, j == WALL) <= 0:
+                other = "the wall" if j == WALL else f"bodies.{j}"
+                raise SceneError(f"bodies.{i}.position: its roughness layer touches that of {other} (gap"
+                                 f" {gap:.4g} m; with repulsion on the gap must exceed"
+                                 f" {rep.cell_roughness + (rep.wall_roughness if j == WALL else rep.cell_roughness):.4g} m)")
+
+
 def body_arrays(scene: Scene):
-    """Initial positions (n, 3), orientations (n, 4) and densities (n,)."""
-    return (np.array([b[2] for b in scene.bodies]), np.array([b[3] for b in scene.bodies]),
-            np.array([b[5] for b in scene.bodies]))
+    """Initial positions (n, 3), orientations (n, 4), densities (n,), forces and torques (n, 3)."""
+    return tuple(np.array([b[k] for b in scene.bodies]) for k in (2, 3, 5, 6, 7))

@@ -1,0 +1,98 @@
+"""Electrostatic repulsion (thesis eq. 3.1) and the exact gaps it is evaluated at."""
+
+import numpy as np
+import pytest
+
+import warpbem as wb
+from warpbem import quad9
+from warpbem.contact import WALL, GapFinder
+from warpbem.placement import signed_distance
+from warpbem.repulsion import Repulsion
+
+
+def test_force_law_is_thesis_eq_3_1_and_the_gradient_of_its_potential():
+    """F = F0 tau exp(-tau eps) / (1 - exp(-tau eps)) (thesis eq. 3.1, tau = 2000 /um) with F0
+    in pN um read as J (1e6 pN um = 1e-12 J); F = -dU/d eps for U = -F0 ln(1 - exp(-tau eps))."""
+    rep = Repulsion()
+    assert rep.inverse_length == 2000 / 1e-6 and rep.coefficient == 1e6 * 1e-12 * 1e-6
+    eps = np.array([1e-10, 1e-9, 5e-9, 1e-8, 2e-8])
+    literal = rep.coefficient * rep.inverse_length * np.exp(-rep.inverse_length * eps) / (
+        1 - np.exp(-rep.inverse_length * eps))
+    np.testing.assert_allclose(rep.force(eps), literal, rtol=1e-12)
+    h = 1e-4 * eps
+    np.testing.assert_allclose(-(rep.potential(eps + h) - rep.potential(eps - h)) / (2 * h), literal, rtol=1e-5)
+    np.testing.assert_allclose((rep.force(eps + h) - rep.force(eps - h)) / (2 * h), rep.slope(eps), rtol=1e-5)
+    # close in, the law tends to F0 / eps; the balance separation inverts it
+    assert rep.force(1e-13) == pytest.approx(rep.coefficient / 1e-13, rel=1e-3)
+    for load in (1e-13, 1e-11, 1e-9):
+        assert rep.force(rep.balance_separation(load)) == pytest.approx(load, rel=1e-10)
+    assert rep.force(rep.reach) == pytest.approx(1e-18, rel=1e-6)
+    # roughness: cell 175 nm, wall 50 nm (thesis ch. 3.1)
+    assert rep.separation(400e-9, True) == pytest.approx(175e-9)
+    assert rep.separation(400e-9, False) == pytest.approx(50e-9)
+
+
+def test_repulsion_rejects_bad_parameters():
+    with pytest.raises(ValueError, match="coefficient"):
+        Repulsion(coefficient=-1.0)
+    with pytest.raises(ValueError, match="wall_roughness"):
+        Repulsion(wall_roughness=float("nan"))
+    with pytest.raises(ValueError, match="already touch"):
+        Repulsion().implicit_forces([-1e-9], [0.0], [[1.0]], 1e-3)
+
+
+def test_implicit_forces_solve_the_backward_euler_equation():
+    """eps' = eps + dt (rate + B F(eps')) for two coupled contacts; for dt -> infinity the
+    separations go to where the repulsion cancels the approach, rate + B F = 0."""
+    rep = Repulsion()
+    eps, rate = np.array([20e-9, 15e-9]), np.array([-3e-6, -1e-6])
+    response = np.array([[4e6, 1e6], [1e6, 2e6]])  # m/(N s)
+    for dt in (1e-5, 1e-3, 1e-1):
+        force, end = rep.implicit_forces(eps, rate, response, dt)
+        np.testing.assert_allclose(end, eps + dt * (rate + response @ force), rtol=0, atol=1e-18)
+        np.testing.assert_allclose(force, rep.force(end), rtol=1e-12)
+        assert np.all(end > 0)
+    force, _ = rep.implicit_forces(eps, rate, response, 1e6)
+    np.testing.assert_allclose(rate + response @ force, 0.0, atol=1e-7 * np.abs(rate).max())
+
+
+@pytest.fixture(scope="module")
+def finder():
+    return GapFinder()
+
+
+@pytest.mark.parametrize("gap", [1e-6, 3e-7, 1e-8])
+def test_gap_between_spheres_is_exact(finder, gap):
+    """Along a coordinate axis the QUAD9 cube-sphere passes through the exact sphere at its face
+    centres, so the gap is the analytic one; obliquely the Newton result is the minimum of the
+    QUAD9 surfaces: never above a dense sampling (12 x 12 Gauss points per element of the other
+    body, independent code in placement.py) and within its sampling error."""
+    a = 5e-6
+    m = wb.mesh.sphere(a, 4)
+    centre = np.array([0.0, 0.0, 20e-6])
+    bodies = [wb.Body(m, position=centre), wb.Body(m, position=centre + [2 * a + gap, 0, 0])]
+    g = finder.between(bodies, 0, 1)
+    assert g.distance == pytest.approx(gap, rel=1e-9)
+    np.testing.assert_allclose(g.normal, [-1, 0, 0], atol=1e-9)
+    direction = np.array([1.0, 2.0, 3.0]) / np.sqrt(14.0)
+    bodies = [wb.Body(m, position=centre), wb.Body(m, position=centre + (2 * a + gap) * direction)]
+    g = finder.between(bodies, 1, 0)
+    samples, _ = quad9.surface_quadrature(bodies[1].world_nodes()[m.elements], 12)
+    sampled = signed_distance(samples.reshape(-1, 3), bodies[0].world_nodes()[m.elements]).min()
+    assert g.distance <= sampled + 1e-15
+    assert sampled - g.distance < 3e-9
+    assert abs(g.distance - gap) < 2e-9  # the QUAD9 sphere departs from the exact one by ~1 nm
+    np.testing.assert_allclose(g.normal, direction, atol=3e-3)  # faceted: normals of the QUAD9 sphere
+    np.testing.assert_allclose(np.linalg.norm(g.point - g.other_point), g.distance, rtol=1e-12)
+
+
+def test_gap_to_the_wall_is_the_lowest_point(finder):
+    a = 5e-6
+    m = wb.mesh.sphere(a, 4)
+    q = np.array([np.cos(0.3), np.sin(0.3), 0.2, 0.0])
+    body = wb.Body(m, position=(1e-6, -2e-6, a + 2e-7), orientation=q)
+    g = finder.between([body], 0, WALL)
+    samples, _ = quad9.surface_quadrature(body.world_nodes()[m.elements], 12)
+    assert g.distance <= samples[..., 2].min()
+    assert g.distance == pytest.approx(2e-7, abs=2e-9)
+    assert g.point[2] == pytest.approx(g.distance) and g.other_point[2] == 0.0
