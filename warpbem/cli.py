@@ -23,7 +23,9 @@ def main(argv=None) -> int:
     run.add_argument("--resume", action="store_true", help="continue the run in --output from its last frame")
     sweep = sub.add_parser("sweep", help="run a scene over a grid of values (one HDF5 per point, summary.csv)")
     sweep.add_argument("scene")
-    sweep.add_argument("--vary", action="append", required=True, metavar="KEY=V1,V2,...")
+    sweep.add_argument("--vary", action="append", default=[], metavar="KEY=V1,V2,...",
+                       help="a scene key or a [sweep.AXIS] name of the scene, and its values (default: every"
+                            " axis of the scene)")
     sweep.add_argument("--output-dir", required=True)
     sweep.add_argument("--workers", type=int, default=1, help="local processes (default %(default)s)")
     sweep.add_argument("--device", default="cpu")

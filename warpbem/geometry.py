@@ -32,9 +32,10 @@ class SurfaceGeometry:
 
     @classmethod
     def from_bodies(cls, bodies, order: int, length_scale: float, wall: bool,
-                    contact_refinement: float = 0.0) -> "SurfaceGeometry":
+                    contact_refinement: float = 0.0, refine_fixed_at_wall: bool = True) -> "SurfaceGeometry":
         nodes = [b.world_nodes()[b.mesh.elements] / length_scale for b in bodies]
-        nodes, unresolved = refine_near_contact(nodes, wall, contact_refinement)
+        exempt = None if refine_fixed_at_wall else [b.fixed for b in bodies]
+        nodes, unresolved = refine_near_contact(nodes, wall, contact_refinement, wall_exempt=exempt)
         counts = [len(n) for n in nodes]
         element_nodes = np.concatenate(nodes)
         stops = np.cumsum(counts)

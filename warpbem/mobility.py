@@ -235,13 +235,16 @@ class MobilitySolver:
 
     Between calls it keeps the operator blocks, and the fixed-body completion columns, of
     bodies whose elements did not change (fixed adherent cells), and starts GMRES from the
-    previous solution (``reuse=True``). Settings as in ``solve_mobility``.
+    previous solution (``reuse=True``). Settings as in ``solve_mobility``, and
+    ``refine_fixed_at_wall=False``: no contact refinement of fixed bodies for their (unchanging)
+    gap to the wall, which in recruitment scenes costs ~90x per step for a ~1 % effect on the
+    free cells (scenes/recruitment_dome.toml).
     """
 
     def __init__(self, shear_rate: float = 0.0, viscosity: float = 1e-3, wall: bool = True, device="cpu", *,
                  quadrature_order: int = 2, adaptive_quadrature: bool = True, tolerance: float = 1e-8,
                  max_iterations: int = 600, dtype: str = "float64", operator: str = "auto",
-                 contact_refinement: float = 3.0, reuse: bool = True):
+                 contact_refinement: float = 3.0, refine_fixed_at_wall: bool = True, reuse: bool = True):
         self.shear_rate = _finite("shear_rate", shear_rate)
         self.viscosity = _finite("viscosity", viscosity, positive=True)
         self.wall = bool(wall)
@@ -252,6 +255,7 @@ class MobilitySolver:
         self.dtype = dtype
         self.operator = operator
         self.contact_refinement = _finite("contact_refinement", contact_refinement)
+        self.refine_fixed_at_wall = bool(refine_fixed_at_wall)
         self.reuse = bool(reuse)
         self._last = None  # (CompletedDoubleLayer, solution vector, speed, bodies key) of the previous solve
         self._warned = set()  # contacts already reported by this solver
@@ -293,7 +297,7 @@ class MobilitySolver:
             geometry, double_layer = system.geometry, system.operator
         else:
             geometry = SurfaceGeometry.from_bodies(bodies, self.quadrature.order, length, self.wall,
-                                                   self.contact_refinement)
+                                                   self.contact_refinement, self.refine_fixed_at_wall)
             self._warn_unresolved(geometry, length)
             double_layer = DoubleLayerOperator(geometry, self.wall, self.quadrature, self.dtype, self.device,
                                                self.operator, reuse=previous.operator if previous else None)

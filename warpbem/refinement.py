@@ -40,8 +40,8 @@ WALL = -1  # neighbour id of the wall in the contact lists
 
 
 def _gaps(meshes, p, wall, ratio):
-    """Gap from each element centre of body p to the wall and to every other body near enough
-    to matter, and the nearest neighbour (WALL or a body index)."""
+    """Gap from each element centre of body p to the wall (if ``wall``) and to every other body
+    near enough to matter, and the nearest neighbour (WALL or a body index)."""
     elements = meshes[p]
     centres = elements[:, 8]
     gap = np.full(len(elements), np.inf)
@@ -68,9 +68,12 @@ def _gaps(meshes, p, wall, ratio):
 
 
 def refine_near_contact(element_nodes: list[np.ndarray], wall: bool, ratio: float,
-                        max_levels: int = 4, warn_ratio: float = 3.0) -> tuple[list[np.ndarray], dict]:
+                        max_levels: int = 4, warn_ratio: float = 3.0,
+                        wall_exempt=None) -> tuple[list[np.ndarray], dict]:
     """Refine every body's elements (list of (E_p, 9, 3) arrays, one per body); ``ratio`` 0
-    refines nothing.
+    refines nothing. ``wall_exempt`` (one flag per body): bodies not refined for, nor warned
+    about, their gap to the wall (adherent cells, whose fixed gap to the wall changes the free
+    cells' motion little; see scenes/recruitment_dome.toml).
 
     Returns the refined meshes and the contacts they leave unresolved: {(p, q): smallest gap}
     for body p near body q (q = WALL for the wall) where an element of p is still wider (in
@@ -80,10 +83,11 @@ def refine_near_contact(element_nodes: list[np.ndarray], wall: bool, ratio: floa
     below about 0.005 radius the results are meaningless or GMRES stalls.
     """
     meshes = [e.copy() for e in element_nodes]
+    exempt = np.zeros(len(meshes), bool) if wall_exempt is None else np.asarray(wall_exempt, bool)
     for _ in range(max_levels if ratio > 0 else 0):
         changed = False
         for p, elements in enumerate(meshes):
-            gap, _ = _gaps(meshes, p, wall, ratio)
+            gap, _ = _gaps(meshes, p, wall and not exempt[p], ratio)
             coarse = element_radius(elements) * ratio > gap
             if coarse.any():
                 meshes[p] = np.concatenate([elements[~coarse], split(elements[coarse])])
@@ -92,7 +96,7 @@ def refine_near_contact(element_nodes: list[np.ndarray], wall: bool, ratio: floa
             break
     unresolved = {}
     for p, elements in enumerate(meshes):
-        gap, neighbour = _gaps(meshes, p, wall, max(ratio, warn_ratio))
+        gap, neighbour = _gaps(meshes, p, wall and not exempt[p], max(ratio, warn_ratio))
         coarse = element_radius(elements) * warn_ratio > gap
         for q in np.unique(neighbour[coarse]):
             unresolved[(p, int(q))] = float(gap[coarse & (neighbour == q)].min())

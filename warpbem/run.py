@@ -42,7 +42,8 @@ def _write_frame(writer, sim, state, motion, dt):
 def build(scene: scenes.Scene, device="cpu") -> Simulator:
     solver = MobilitySolver(scene.shear_rate, scene.viscosity, scene.wall, device,
                             quadrature_order=scene.quadrature_order, tolerance=scene.tolerance,
-                            contact_refinement=scene.contact_refinement)
+                            contact_refinement=scene.contact_refinement,
+                            refine_fixed_at_wall=scene.refine_fixed_at_wall)
     _, _, densities, forces, torques = scenes.body_arrays(scene)
     return Simulator([b[1] for b in scene.bodies], [b[4] for b in scene.bodies], solver,
                      densities=densities, fluid_density=scene.fluid_density, forces=forces, torques=torques,

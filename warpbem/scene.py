@@ -9,7 +9,8 @@ viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
                                 the unit convention of F0 is explained in warpbem/repulsion.py)
     [time]                      end = 0.01, dt_max = 1e-4, dt_min = 1e-5, contact_gap = 5e-7,
                                 scheme = "heun", frame_every = 10
-    [solver]                    quadrature_order = 2, contact_refinement = 3.0, tolerance = 1e-8
+    [solver]                    quadrature_order = 2, contact_refinement = 3.0, tolerance = 1e-8,
+                                refine_fixed_at_wall = true
     [[bodies]]                  name, position = [x, y, z], orientation = [w, x, y, z],
                                 fixed = false, density = 1000.0, force = [0, 0, 0] (N),
                                 torque = [0, 0, 0] (N m) on free bodies, and a mesh:
@@ -96,6 +97,8 @@ class Scene:
     quadrature_order: int
     contact_refinement: float
     tolerance: float
+    refine_fixed_at_wall: bool
+    sweep: dict  # {axis: {label: [key=value overrides]}}, the cases ``warpbem sweep`` runs
 
     def initial_bodies(self) -> list[Body]:
         return [Body(b[1], position=b[2], orientation=b[3], fixed=b[4]) for b in self.bodies]
@@ -121,13 +124,16 @@ def _mesh(where, spec, folder: Path):
 
 def parse(table: dict, folder: Path = Path(".")) -> Scene:
     """Validate a scene table (as read from TOML) and build the Scene."""
-    _table("scene", table, {"flow", "physics", "repulsion", "time", "solver", "bodies"}, ("flow", "time", "bodies"))
+    _table("scene", table, {"flow", "physics", "repulsion", "time", "solver", "bodies", "sweep"},
+           ("flow", "time", "bodies"))
+    sweep = _sweep_axes(table.get("sweep", {}))
     flow = _table("flow", table["flow"], {"shear_rate", "viscosity", "wall"}, ("shear_rate",))
     physics = _table("physics", table.get("physics", {}), {"gravity", "fluid_density", "repulsion"})
     repulsion = _table("repulsion", table.get("repulsion", {}),
                        {"coefficient", "inverse_length", "cell_roughness", "wall_roughness"})
     time = _table("time", table["time"], {"end", "dt_max", "dt_min", "contact_gap", "scheme", "frame_every"}, ("end",))
-    solver = _table("solver", table.get("solver", {}), {"quadrature_order", "contact_refinement", "tolerance"})
+    solver = _table("solver", table.get("solver", {}), {"quadrature_order", "contact_refinement", "tolerance",
+                                                        "refine_fixed_at_wall"})
     if not isinstance(table["bodies"], list) or not table["bodies"]:
         raise SceneError("bodies: expected at least one [[bodies]] entry")
     bodies = []
@@ -144,6 +150,11 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
                        _vector(f"{where}.torque", spec.get("torque", [0.0, 0.0, 0.0]), 3)))
     dt_max = _number("time.dt_max", time.get("dt_max", 1e-4), 0, 10, low_open=True)
     dt_min = _number("time.dt_min", time.get("dt_min", min(1e-5, dt_max)), 0, dt_max, low_open=True)
+    repulsion_model = Repulsion(  # validated even when switched off, so typos surface early
+        _number("repulsion.coefficient", repulsion.get("coefficient", 1e-12), 0, 1, low_open=True),
+        _number("repulsion.inverse_length", repulsion.get("inverse_length", 2e9), 0, 1e12, low_open=True),
+        _number("repulsion.cell_roughness", repulsion.get("cell_roughness", 175e-9), 0, 1e-5),
+        _number("repulsion.wall_roughness", repulsion.get("wall_roughness", 50e-9), 0, 1e-5))
     scheme = time.get("scheme", "heun")
     if scheme not in ("euler", "heun"):
         raise SceneError(f"time.scheme: {scheme!r} is not one of 'euler', 'heun'")
@@ -154,19 +165,32 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
         wall=_bool("flow.wall", flow.get("wall", True)),
         gravity=_bool("physics.gravity", physics.get("gravity", False)),
         fluid_density=_number("physics.fluid_density", physics.get("fluid_density", 1000.0), 100.0, 1e5),
-        repulsion=Repulsion(
-            _number("repulsion.coefficient", repulsion.get("coefficient", 1e-12), 0, 1, low_open=True),
-            _number("repulsion.inverse_length", repulsion.get("inverse_length", 2e9), 0, 1e12, low_open=True),
-            _number("repulsion.cell_roughness", repulsion.get("cell_roughness", 175e-9), 0, 1e-5),
-            _number("repulsion.wall_roughness", repulsion.get("wall_roughness", 50e-9), 0, 1e-5),
-        ) if _bool("physics.repulsion", physics.get("repulsion", False)) else None,
+        repulsion=repulsion_model if _bool("physics.repulsion", physics.get("repulsion", False)) else None,
         end=_number("time.end", time["end"], 0, 1e6, low_open=True), dt_max=dt_max, dt_min=dt_min,
         contact_gap=_number("time.contact_gap", time.get("contact_gap", 5e-7), 0, 1e-2, low_open=True),
         scheme=scheme, frame_every=_number("time.frame_every", time.get("frame_every", 1), 1, 1e9, integer=True),
         quadrature_order=_number("solver.quadrature_order", solver.get("quadrature_order", 2), 1, 10, integer=True),
         contact_refinement=_number("solver.contact_refinement", solver.get("contact_refinement", 3.0), 0, 20),
         tolerance=_number("solver.tolerance", solver.get("tolerance", 1e-8), 0, 0.1, low_open=True),
+        refine_fixed_at_wall=_bool("solver.refine_fixed_at_wall", solver.get("refine_fixed_at_wall", True)),
+        sweep=sweep,
     )
+
+
+def _sweep_axes(table) -> dict:
+    """[sweep.AXIS] tables: label = ["key=value", ...], one case per label."""
+    if not isinstance(table, dict):
+        raise SceneError(f"sweep: expected tables [sweep.NAME], got {table!r}")
+    axes = {}
+    for axis, cases in table.items():
+        if not isinstance(cases, dict) or not cases:
+            raise SceneError(f"sweep.{axis}: expected a table of label = [\"key=value\", ...] cases")
+        for label, overrides in cases.items():
+            if (not isinstance(overrides, list) or not overrides
+                    or not all(isinstance(o, str) and "=" in o for o in overrides)):
+                raise SceneError(f"sweep.{axis}.{label}: expected a list of \"key=value\" strings")
+        axes[axis] = {str(label): list(overrides) for label, overrides in cases.items()}
+    return axes
 
 
 def apply_overrides(table: dict, overrides) -> dict:

@@ -3,8 +3,12 @@ summary table (CSV), in local worker processes.
 
     warpbem sweep SCENE --vary flow.shear_rate=80,100,120 --vary bodies.0.position=[0,2e-6,8e-6],[0,5e-6,8e-6]
                   --output-dir results/sweep [--workers 2]
+    warpbem sweep scenes/fig5_04_05_shapes.toml --vary glance=2,3.5 --vary shape=sphere,box ...
 
-Values are TOML (numbers, booleans, [arrays]); commas inside brackets do not split values.
+``--vary KEY=V1,V2`` sets a scene key to each value (TOML: numbers, booleans, [arrays]; commas
+inside brackets do not split values). ``--vary AXIS=L1,L2`` picks cases of a named axis of the
+scene's [sweep.AXIS] tables (each case a list of key=value overrides); without any --vary the
+grid of all the scene's axes runs.
 """
 
 from __future__ import annotations
@@ -40,35 +44,50 @@ def split_values(text: str) -> list[str]:
     return [p.strip() for p in parts]
 
 
-def grid(varies) -> list[list[str]]:
-    """Every combination of the --vary KEY=V1,V2 options, as lists of key=value overrides."""
+def grid(varies, scene_axes=None) -> list[tuple[dict, list[str]]]:
+    """Every combination of the --vary options: (labels {name: value}, key=value overrides)."""
+    scene_axes = scene_axes or {}
+    if not varies:
+        varies = [f"{axis}={','.join(cases)}" for axis, cases in scene_axes.items()]
     axes = []
     for item in varies:
         if "=" not in item:
             raise SceneError(f"--vary {item!r}: expected KEY=V1,V2,...")
         key, values = item.split("=", 1)
-        axes.append([f"{key}={v}" for v in split_values(values)])
-    return [list(point) for point in itertools.product(*axes)]
+        if key in scene_axes:
+            cases = scene_axes[key]
+            for v in split_values(values):
+                if v not in cases:
+                    raise SceneError(f"--vary {key}: no case {v!r}; the scene has {', '.join(cases)}")
+            axes.append([({key: v}, cases[v]) for v in split_values(values)])
+        else:
+            axes.append([({key: v}, [f"{key}={v}"]) for v in split_values(values)])
+    return [({k: v for labels, _ in point for k, v in labels.items()}, [o for _, o in point for o in o])
+            for point in itertools.product(*axes)]
 
 
 def _run_point(args):
-    scene_path, output, overrides, device = args
+    scene_path, output, labels, overrides, device = args
     runner.run(scene_path, output, overrides, device, progress=lambda line: None)
     with h5py.File(output, "r") as f:
         start, end = f["position"][0], f["position"][-1]
         names = json.loads(f.attrs["body_names"])
-    return {"file": str(output), **{o.split("=", 1)[0]: o.split("=", 1)[1] for o in overrides},
+        closest = float(np.min(f["closest_gap"][:]))
+    return {"file": str(output), **labels, "closest_gap_m": closest,
             **{f"{n}_dz_m": float(end[i, 2] - start[i, 2]) for i, n in enumerate(names)},
             **{f"{n}_dx_m": float(end[i, 0] - start[i, 0]) for i, n in enumerate(names)}}
 
 
 def sweep(scene_path, varies, output_dir, device="cpu", workers=1, progress=print) -> Path:
-    points = grid(varies)
-    for overrides in points:  # validate every point before any work
+    points = grid(varies, load(scene_path).sweep)
+    if not points or not points[0][1]:
+        raise SceneError("nothing to sweep: give --vary KEY=V1,V2 or add [sweep.AXIS] cases to the scene")
+    for _, overrides in points:  # validate every point before any work
         load(scene_path, overrides)
     output_dir = Path(output_dir)
     output_dir.mkdir(parents=True, exist_ok=True)
-    jobs = [(scene_path, output_dir / f"point{i:03d}.h5", overrides, device) for i, overrides in enumerate(points)]
+    jobs = [(scene_path, output_dir / f"point{i:03d}.h5", labels, overrides, device)
+            for i, (labels, overrides) in enumerate(points)]
     rows = []
     if workers <= 1:
         results = map(_run_point, jobs)

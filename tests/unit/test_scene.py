@@ -23,7 +23,7 @@ def write(tmp_path, table):
     def emit(prefix, value):
         return f"{prefix} = {json.dumps(value)}"
 
-    for key in ("flow", "physics", "time", "solver"):
+    for key in ("flow", "physics", "repulsion", "time", "solver"):
         if key in table:
             lines.append(f"[{key}]")
             lines += [emit(k, v) for k, v in table[key].items()]
@@ -48,6 +48,12 @@ def write(tmp_path, table):
     (lambda t: t["time"].update(dt_min=1.0), r"time.dt_min: 1 is outside the allowed range"),
     (lambda t: t["bodies"][0]["mesh"].update(shape="file", path="missing.q9"), r"bodies.0.mesh.path: .*cannot read"),
     (lambda t: t["bodies"].append(dict(t["bodies"][0], position=[1e-6, 0.0, 8e-6])), r"initial placement: bodies 0 and 1 overlap"),
+    (lambda t: t.update(repulsion={"tau": 1.0}), r"repulsion: unknown key 'tau'"),
+    (lambda t: t.update(repulsion={"cell_roughness": -1e-9}), r"repulsion.cell_roughness: -1e-09 is outside"),
+    (lambda t: t["bodies"][0].update(force=[0.0, 1e-12]), r"bodies.0.force: expected a list of 3 numbers"),
+    # 200 nm above the wall is inside the 175 + 50 nm roughness layers: eq. 3.1 has no value there
+    (lambda t: (t["physics"].update(repulsion=True), t["bodies"][0].update(position=[0.0, 0.0, 5.2e-6])),
+     r"bodies.0.position: its roughness layer touches that of the wall"),
 ])
 def test_bad_scenes_name_the_field(tmp_path, change, message):
     table = json.loads(json.dumps(BASE))
