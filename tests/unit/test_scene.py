@@ -172,7 +172,44 @@ def test_every_shipped_scene_is_valid():
 
     folder = Path(__file__).resolve().parents[2] / "scenes"
     files = sorted(folder.glob("*.toml"))
-    assert len(files) >= 2
+    assert len(files) >= 14
+    from warpbem.sweep import grid
+
     for path in files:
         s = scene.load(path)
         assert s.end > 0 and len(s.bodies) >= 1
+        for _, overrides in grid([], s.sweep):  # every case of the scene's sweep axes
+            scene.load(path, overrides)
+
+
+# thesis ch. 5.3: (scene, free cell start x, z in um, glances in um, adherent centre heights in um)
+THESIS_CASES = [
+    ("fig5_03_sphere_glance", -9, 13, [2, 3.5, 5, 6.5], {5.25}),
+    ("fig5_04_05_shapes", -9, 13, [2, 3.5], {5.25, 4.5, 3.25}),
+    ("fig5_07_dome_glance", -9, 12.25, [3.5, 5, 6.5], {4.5}),
+    ("fig5_09_box_glance", -9, 11, [3.5, 5, 6.5], {3.25}),
+    ("fig5_11_two_domes", -9, 12.25, [3.5, 6.5], {4.5}),
+    ("fig5_12_two_boxes", -9, 11, [3.5, 6.5], {3.25}),
+    ("fig5_19_20_glance", -9, 6, [15, 25], {5.25, 4.5, 3.25}),
+]
+
+
+@pytest.mark.parametrize("name, x, z, glances, heights", THESIS_CASES)
+def test_thesis_scenes_place_the_cells_as_the_thesis_does(name, x, z, glances, heights):
+    from pathlib import Path
+
+    from warpbem.sweep import grid
+
+    path = Path(__file__).resolve().parents[2] / "scenes" / f"{name}.toml"
+    seen_glances, seen_heights = set(), set()
+    for _, overrides in grid([], scene.load(path).sweep):
+        s = scene.load(path, overrides)
+        free = [b for b in s.bodies if not b[4]]
+        assert len(free) == 1 and free[0][2][0] == pytest.approx(x * 1e-6) and free[0][2][2] == pytest.approx(z * 1e-6)
+        seen_glances.add(round(free[0][2][1] * 1e6, 6))
+        fixed = [b for b in s.bodies if b[4]]
+        seen_heights |= {round(b[2][2] * 1e6, 6) for b in fixed}
+        assert s.shear_rate == 100.0 and s.repulsion is not None and s.repulsion.inverse_length == 2e9
+        if name.startswith("fig5_1") and "two" in name:  # two adherent cells 30 um apart in the flow
+            assert sorted(b[2][0] for b in fixed) == pytest.approx([0.0, 30e-6])
+    assert seen_glances == set(glances) and seen_heights == heights

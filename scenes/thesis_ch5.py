@@ -1,0 +1,135 @@
+"""Reproduce thesis ch. 5 (hydrodynamic recruitment, figs. 5.3-5.20): run every case of the
+ch. 5 scene files with ``warpbem sweep`` and summarise the free-stream cell's trajectory next to
+the thesis's statements.
+
+    python scenes/thesis_ch5.py --run --workers 2   # runs what is missing (about an hour on 2 cores)
+    python scenes/thesis_ch5.py                      # table and figures from the runs on disk
+
+Runs go to results/ch5/<scene>/pointNNN.h5 (the sweep's grid order); this writes
+results/ch5/summary.csv (one row per case, lengths in nm) and results/ch5/<scene>.png: the free
+cell's height change Z(t) - Z(0) for every case, one panel per value of the scene's first sweep
+axis when it has two (as the thesis's figures pair them), and the closest surface gap.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+SCENES = ["fig5_03_sphere_glance", "fig5_04_05_shapes", "fig5_07_dome_glance", "fig5_09_box_glance",
+          "fig5_11_two_domes", "fig5_12_two_boxes", "fig5_13_14_near_wall", "fig5_16_17_shear",
+          "fig5_18_neutral", "fig5_19_20_glance"]
+
+
+def cases(scene_name):
+    from warpbem import scene
+    from warpbem.sweep import grid
+
+    path = HERE / f"{scene_name}.toml"
+    return path, grid([], scene.load(path).sweep)
+
+
+def free_cell_metrics(h5_path) -> dict:
+    """Height change of the free cell (nm): largest rise, deepest drop, at the end; its lateral
+    drift; the smallest surface gap to anything (nm) and the run's extent."""
+    with h5py.File(h5_path, "r") as f:
+        names = json.loads(f.attrs["body_names"])
+        i = names.index("free") if "free" in names else 0
+        z = f["position"][:, i, 2]
+        y = f["position"][:, i, 1]
+        x = f["position"][:, i, 0]
+        return {"rise_nm": 1e9 * max(z.max() - z[0], 0.0), "drop_nm": 1e9 * min(z.min() - z[0], 0.0),
+                "final_dz_nm": 1e9 * (z[-1] - z[0]), "final_dy_nm": 1e9 * (y[-1] - y[0]),
+                "closest_gap_nm": 1e9 * float(np.min(f["closest_gap"][:])), "end_time_s": float(f["time"][-1]),
+                "end_x_um": 1e6 * x[-1], "steps": int(len(z) - 1)}
+
+
+def plot(scene_name, rows, out_png):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    axes_names = [k for k in rows[0]["labels"]]
+    panel_axis = axes_names[0] if len(axes_names) == 2 else None
+    panels = sorted({r["labels"][panel_axis] for r in rows}, key=rows_order(rows, panel_axis)) if panel_axis else [None]
+    fig, axes = plt.subplots(1, len(panels) + 1, figsize=(5 * (len(panels) + 1), 3.8), squeeze=False)
+    for k, panel in enumerate(panels):
+        ax = axes[0, k]
+        for r in rows:
+            if panel is not None and r["labels"][panel_axis] != panel:
+                continue
+            curve = ", ".join(f"{a} {v}" for a, v in r["labels"].items() if a != panel_axis)
+            with h5py.File(r["file"], "r") as f:
+                names = json.loads(f.attrs["body_names"])
+                i = names.index("free")
+                t, z = f["time"][:], f["position"][:, i, 2]
+                gap = f["closest_gap"][:]
+            ax.plot(t, (z - z[0]) * 1e9, label=curve)
+            axes[0, -1].plot(t, gap * 1e9, label=", ".join(f"{a} {v}" for a, v in r["labels"].items()))
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.set(xlabel="t [s]", ylabel="Z(t) - Z(0) of the free cell [nm]",
+               title=f"{panel_axis} {panel}" if panel is not None else scene_name)
+        ax.legend(fontsize=8)
+        ax.grid(alpha=0.3)
+    axes[0, -1].set(xlabel="t [s]", ylabel="closest surface gap [nm]", yscale="log", title="no overlap: gap > 0")
+    axes[0, -1].legend(fontsize=7)
+    axes[0, -1].grid(alpha=0.3)
+    fig.suptitle(f"{scene_name} (thesis ch. 5)")
+    fig.tight_layout()
+    fig.savefig(out_png, dpi=110)
+    plt.close(fig)
+
+
+def rows_order(rows, axis):
+    order = []
+    for r in rows:
+        if r["labels"][axis] not in order:
+            order.append(r["labels"][axis])
+    return order.index
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--run", action="store_true", help="run the cases that have no result yet")
+    parser.add_argument("--workers", type=int, default=1)
+    parser.add_argument("--results", default="results/ch5")
+    args = parser.parse_args()
+    results = Path(args.results)
+    table = []
+    for name in SCENES:
+        path, points = cases(name)
+        folder = results / name
+        files = [folder / f"point{i:03d}.h5" for i in range(len(points))]
+        if args.run and not all(f.exists() for f in files):
+            from warpbem.sweep import sweep
+
+            sweep(path, [], folder, workers=args.workers)
+        rows = [{"labels": labels, "file": f} for (labels, _), f in zip(points, files) if f.exists()]
+        for r in rows:
+            r.update(free_cell_metrics(r["file"]))
+            table.append({"scene": name, "case": ", ".join(f"{k} {v}" for k, v in r["labels"].items()),
+                          **{k: v for k, v in r.items() if k not in ("labels", "file")}})
+        if rows:
+            plot(name, rows, results / f"{name}.png")
+    if not table:
+        raise SystemExit(f"no runs under {results}; use --run")
+    with (results / "summary.csv").open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(table[0]))
+        writer.writeheader()
+        writer.writerows(table)
+    print("| scene | case | rise [nm] | drop [nm] | final dZ [nm] | closest gap [nm] | t end [s] |")
+    print("|---|---|---|---|---|---|---|")
+    for r in table:
+        print(f"| {r['scene']} | {r['case']} | {r['rise_nm']:.0f} | {r['drop_nm']:.0f} | {r['final_dz_nm']:.0f}"
+              f" | {r['closest_gap_nm']:.0f} | {r['end_time_s']:.3f} |")
+
+
+if __name__ == "__main__":
+    main()
