@@ -1,4 +1,5 @@
-"""Command line: ``warpbem demo`` runs the default scene, ``warpbem plot`` charts a result."""
+"""Command line: ``warpbem demo`` runs the default scene, ``warpbem run`` / ``sweep`` run scene
+files, ``warpbem plot`` charts a result, ``warpbem xdmf`` writes a run's moving meshes for ParaView."""
 
 from __future__ import annotations
 
@@ -27,11 +28,17 @@ def main(argv=None) -> int:
                        help="a scene key or a [sweep.AXIS] name of the scene, and its values (default: every"
                             " axis of the scene)")
     sweep.add_argument("--output-dir", required=True)
-    sweep.add_argument("--workers", type=int, default=1, help="local processes (default %(default)s)")
+    where = sweep.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=1, help="local processes (default %(default)s)")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="run the points on a Dask cluster, e.g. tcp://127.0.0.1:8786 (the dask extra; the"
+                            " workers must see the scene and --output-dir at the same paths)")
     sweep.add_argument("--device", default="cpu")
     plot = sub.add_parser("plot", help="write the PNG chart of a run or demo HDF5 file")
     plot.add_argument("result", help="HDF5 file written by warpbem run or warpbem demo")
     plot.add_argument("--png", default=None, help="output PNG (default: beside the HDF5 file)")
+    xdmf = sub.add_parser("xdmf", help="write RUN.xdmf (+ RUN.xdmf.h5) beside a run: its meshes moving, for ParaView")
+    xdmf.add_argument("run", help="HDF5 file written by warpbem run or warpbem sweep (only read)")
     args = parser.parse_args(argv)
 
     from . import plotting
@@ -71,15 +78,29 @@ def main(argv=None) -> int:
         return 0
     if args.command == "sweep":
         from .scene import SceneError
+        from .sweep import SweepError
         from .sweep import sweep as run_sweep
 
         try:
             summary = run_sweep(args.scene, args.vary, args.output_dir, args.device, args.workers,
-                                progress=lambda line: print(line, flush=True))
+                                progress=lambda line: print(line, flush=True), scheduler=args.scheduler)
         except SceneError as err:
             print(f"warpbem sweep: {err}", file=sys.stderr)
             return 2
+        except SweepError as err:
+            print(f"warpbem sweep: {err}", file=sys.stderr)
+            return 1
         print(f"summary: {summary}")
+        return 0
+    if args.command == "xdmf":
+        from . import xdmf as xdmf_output
+
+        try:
+            path = xdmf_output.write(args.run)
+        except xdmf_output.RunFileError as err:
+            print(f"warpbem xdmf: {err}", file=sys.stderr)
+            return 2
+        print(f"xdmf: {path} (open it in ParaView; its data is in {path.with_suffix('.xdmf.h5').name})")
         return 0
     print(f"chart: {plotting.plot(args.result, args.png)}")
     return 0

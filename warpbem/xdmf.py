@@ -1,0 +1,108 @@
+"""``warpbem xdmf RUN.h5``: the bodies of a run as moving QUAD9 meshes for ParaView (XDMF 3).
+
+Writes ``RUN.xdmf`` (XML: a temporal collection with one grid per frame) and ``RUN.xdmf.h5``
+(the data it points to, group ``/xdmf``: the connectivity of all bodies' elements and each
+body's index per element, written once, and the world node coordinates of every frame, in
+metres). The run file is only read, without HDF5's file lock, so a run that is still writing
+can be looked at: the frames complete in every column so far are taken.
+
+Element node order: XDMF's ``Quadrilateral_9`` is read as VTK_BIQUADRATIC_QUAD (corners
+counter-clockwise, then the mid-edge nodes of edges 01, 12, 23, 30, then the centre), which is
+the order of ``warpbem.quad9.REFERENCE_NODES``, so the connectivity is written unchanged.
+"""
+
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from .body import rotation_matrix
+from .scene import SceneError, parse
+
+
+class RunFileError(ValueError):
+    """The file is not a warpbem run (or its meshes cannot be rebuilt)."""
+
+
+def _read(run_path: Path):
+    """(meshes, time (F,), positions (F, n, 3), orientations (F, n, 4)) of the complete frames."""
+    try:
+        # no lock: the writer of a run in progress holds one and would make this open fail
+        f = h5py.File(run_path, "r", locking=False)
+    except OSError as err:
+        raise RunFileError(f"{run_path}: not a readable HDF5 file ({err})") from err
+    with f:
+        missing = [k for k in ("time", "position", "orientation") if k not in f] + \
+                  [k for k in ("scene", "scene_folder") if k not in f.attrs]
+        if missing:
+            raise RunFileError(f"{run_path}: not a warpbem run file (no {missing[0]!r}); warpbem xdmf reads"
+                               " the files of warpbem run and warpbem sweep")
+        try:
+            scene = parse(json.loads(f.attrs["scene"]), Path(f.attrs["scene_folder"]))
+        except SceneError as err:
+            raise RunFileError(f"{run_path}: cannot rebuild the meshes of its scene: {err}") from err
+        # a frame is complete once every column has it: the writer fills the columns one by one
+        frames = min(ds.shape[0] for ds in f.values() if isinstance(ds, h5py.Dataset))
+        if frames == 0:
+            raise RunFileError(f"{run_path}: the run has no frame yet")
+        time, positions, orientations = (f[k][:frames] for k in ("time", "position", "orientation"))
+    meshes = [b[1] for b in scene.bodies]
+    if positions.shape[1] != len(meshes):
+        raise RunFileError(f"{run_path}: {positions.shape[1]} bodies in the frames but {len(meshes)} in its scene")
+    return meshes, time, positions, orientations
+
+
+def _world_nodes(meshes, positions, orientations) -> np.ndarray:
+    """All bodies' nodes in the world frame, concatenated: x = R(q) X + position."""
+    return np.concatenate([m.nodes @ rotation_matrix(q / np.linalg.norm(q)).T + p
+                           for m, p, q in zip(meshes, positions, orientations)])
+
+
+def _data_item(parent, dims, number_type, precision, reference):
+    item = ET.SubElement(parent, "DataItem", Dimensions=" ".join(map(str, dims)), NumberType=number_type,
+                         Precision=str(precision), Format="HDF")
+    item.text = reference
+
+
+def write(run_path) -> Path:
+    """Write ``RUN.xdmf`` and ``RUN.xdmf.h5`` beside the run file ``RUN.h5``; returns the .xdmf."""
+    run_path = Path(run_path)
+    meshes, time, positions, orientations = _read(run_path)
+    offsets = np.cumsum([0] + [len(m.nodes) for m in meshes])
+    connectivity = np.concatenate([m.elements + o for m, o in zip(meshes, offsets)])
+    body = np.concatenate([np.full(m.n_elements, i, dtype=np.int32) for i, m in enumerate(meshes)])
+    n_nodes, n_elements = int(offsets[-1]), len(connectivity)
+
+    data_path, xml_path = run_path.with_suffix(".xdmf.h5"), run_path.with_suffix(".xdmf")
+    names = [f"frame{i:06d}" for i in range(len(time))]
+    with h5py.File(data_path, "w") as f:
+        group = f.create_group("xdmf")
+        group.attrs["source"] = str(run_path.resolve())
+        group.create_dataset("connectivity", data=connectivity.astype(np.int64))
+        group.create_dataset("body", data=body)
+        nodes = group.create_group("nodes")
+        nodes.attrs["unit"] = "m"
+        for name, p, q in zip(names, positions, orientations):
+            nodes.create_dataset(name, data=_world_nodes(meshes, p, q))
+
+    root = ET.Element("Xdmf", Version="3.0")
+    domain = ET.SubElement(root, "Domain")
+    series = ET.SubElement(domain, "Grid", Name=run_path.stem, GridType="Collection", CollectionType="Temporal")
+    ET.SubElement(series, "Information", Name="units", Value="SI: coordinates in m, time in s")
+    ref = f"{data_path.name}:/xdmf"  # relative to the .xdmf file, so the pair can be moved together
+    for name, t in zip(names, time):
+        grid = ET.SubElement(series, "Grid", Name=name, GridType="Uniform")
+        ET.SubElement(grid, "Time", Value=repr(float(t)))  # repr: the exact double back on reading
+        topology = ET.SubElement(grid, "Topology", TopologyType="Quadrilateral_9", NumberOfElements=str(n_elements))
+        _data_item(topology, (n_elements, 9), "Int", 8, f"{ref}/connectivity")
+        geometry = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
+        _data_item(geometry, (n_nodes, 3), "Float", 8, f"{ref}/nodes/{name}")
+        attribute = ET.SubElement(grid, "Attribute", Name="body", AttributeType="Scalar", Center="Cell")
+        _data_item(attribute, (n_elements,), "Int", 4, f"{ref}/body")
+    ET.indent(root)
+    ET.ElementTree(root).write(xml_path, encoding="utf-8", xml_declaration=True)
+    return xml_path
