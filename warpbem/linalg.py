@@ -21,8 +21,10 @@ class GMRESResult:
 
 
 def gmres(operator: spla.LinearOperator, rhs: np.ndarray, tolerance: float = 1e-8,
-          restart: int = 60, max_iterations: int = 600, initial_guess=None) -> GMRESResult:
-    """Solve A x = b with SciPy's restarted GMRES; raise ConvergenceError if it fails."""
+          restart: int = 60, max_iterations: int = 600, initial_guess=None,
+          preconditioner: spla.LinearOperator | None = None) -> GMRESResult:
+    """Solve A x = b with SciPy's restarted GMRES (``preconditioner`` M ~ A^-1, optional);
+    raise ConvergenceError if it fails. The residual checked is the true one, ||b - A x||."""
     if not 0 < tolerance < 1:
         raise ValueError(f"GMRES tolerance must lie in (0, 1), got {tolerance!r}")
     rhs_norm = float(np.linalg.norm(rhs))
@@ -37,7 +39,7 @@ def gmres(operator: spla.LinearOperator, rhs: np.ndarray, tolerance: float = 1e-
     if int(max_iterations) != max_iterations or max_iterations < 1:
         raise ValueError(f"max_iterations must be a positive integer, got {max_iterations!r}")
     restart = min(restart, int(max_iterations))
-    x, info = spla.gmres(operator, rhs, x0=initial_guess, rtol=tolerance, atol=0.0,
+    x, info = spla.gmres(operator, rhs, x0=initial_guess, rtol=tolerance, atol=0.0, M=preconditioner,
                          restart=restart, maxiter=-(-int(max_iterations) // restart),
                          callback=count, callback_type="pr_norm")
     residual = float(np.linalg.norm(rhs - operator.matvec(x)) / rhs_norm)

@@ -223,6 +223,41 @@ class CompletedDoubleLayer:
     def linear_operator(self) -> spla.LinearOperator:
         return spla.LinearOperator((self.size, self.size), matvec=self.matvec, dtype=np.float64)
 
+    def body_block(self, body: int) -> np.ndarray:
+        """The diagonal block of ``matvec`` for one body's density (dense operators only):
+        D (I - Pi) + Pi (free) or + C L Pi (fixed: its load columns), Pi = Phi Phi^T W."""
+        rows = self.ranges[body]
+        matrix = self.operator.assemble().numpy()[rows, rows].astype(np.float64)
+        projector = self.modes[body] @ (self.modes[body].T * self.weights[rows])
+        block = matrix - matrix @ projector
+        if self.fixed[body]:
+            k = 6 * self.fixed_index[body]
+            loads = self.load_per_coefficient[k : k + 6, None] * (self.modes[body].T * self.weights[rows])
+            return block + self.fixed_columns[rows, k : k + 6] @ loads
+        return block + projector
+
+    def preconditioner(self, previous: "CompletedDoubleLayer | None") -> spla.LinearOperator | None:
+        """Block Jacobi: the exact inverse of each body's own block (LU), kept for bodies that
+        did not change since ``previous``. It takes the ill-conditioning of a body near the wall
+        (its own image) out of GMRES: the box-shaped adherent cell's unrefined flat base 0.25 um
+        above the wall stalled unpreconditioned GMRES at a residual of 3e-8 after 600
+        iterations. Dense operators only (a matrix-free body block would need its own assembly)."""
+        if self.operator.mode != "dense":
+            return None
+        self.factors = []
+        for p in range(len(self.ranges)):
+            kept = (previous is not None and getattr(previous, "factors", None) and self.unchanged[p]
+                    and p < len(previous.factors) and previous.fixed[p] == self.fixed[p])
+            self.factors.append(previous.factors[p] if kept else scipy.linalg.lu_factor(self.body_block(p)))
+
+        def apply(r):
+            out = np.empty_like(r)
+            for rows, factor in zip(self.ranges, self.factors):
+                out[rows] = scipy.linalg.lu_solve(factor, r[rows])
+            return out
+
+        return spla.LinearOperator((self.size, self.size), matvec=apply, dtype=np.float64)
+
     def rigid_velocity(self, body: int, x: np.ndarray) -> np.ndarray:
         """(U, Omega) of a free body in scaled units: the rigid field -P_p q."""
         coefficients = self.rigid_coefficients(body, x)
@@ -244,7 +279,8 @@ class MobilitySolver:
     def __init__(self, shear_rate: float = 0.0, viscosity: float = 1e-3, wall: bool = True, device="cpu", *,
                  quadrature_order: int = 2, adaptive_quadrature: bool = True, tolerance: float = 1e-8,
                  max_iterations: int = 600, dtype: str = "float64", operator: str = "auto",
-                 contact_refinement: float = 3.0, refine_fixed_at_wall: bool = True, reuse: bool = True):
+                 contact_refinement: float = 3.0, refine_fixed_at_wall: bool = True, reuse: bool = True,
+                 precondition: bool = True):
         self.shear_rate = _finite("shear_rate", shear_rate)
         self.viscosity = _finite("viscosity", viscosity, positive=True)
         self.wall = bool(wall)
@@ -256,6 +292,7 @@ class MobilitySolver:
         self.operator = operator
         self.contact_refinement = _finite("contact_refinement", contact_refinement)
         self.refine_fixed_at_wall = bool(refine_fixed_at_wall)
+        self.precondition = bool(precondition)
         self.reuse = bool(reuse)
         self._last = None  # (CompletedDoubleLayer, solution vector, speed, bodies key) of the previous solve
         self._warned = set()  # contacts already reported by this solver
@@ -328,8 +365,11 @@ class MobilitySolver:
         if initial_guess is None and previous is not None and background:
             # the previous solution is in the previous scaling: rescale the loads part with it
             initial_guess = system.initial_guess(previous, self._last[1] * (self._last[2] / speed))
+        if system is not previous or not hasattr(system, "block_jacobi"):
+            system.block_jacobi = system.preconditioner(previous) if self.precondition else None
         result = gmres(system.linear_operator(), rhs, tolerance=self.tolerance,
-                       max_iterations=self.max_iterations, initial_guess=initial_guess)
+                       max_iterations=self.max_iterations, initial_guess=initial_guess,
+                       preconditioner=system.block_jacobi)
         x = result.solution
         if background or self._last is None or system is not self._last[0]:
             self._last = (system, x, speed, key)
