@@ -43,7 +43,12 @@ def assert_same_sweep(a: Path, b: Path):
     assert [list(r) for r in ra] == [list(r) for r in rb] and len(ra) == 2
     for i, (x, y) in enumerate(zip(ra, rb)):
         assert Path(x.pop("file")) == a / f"point{i:03d}.h5" and Path(y.pop("file")) == b / f"point{i:03d}.h5"
-        assert x == y
+        # same labels; numbers equal to round-off (a worker's BLAS may run on fewer threads,
+        # which reorders the sums of the preconditioner's LU factorisation)
+        assert {k: v for k, v in x.items() if not k.endswith("_m")} == {k: v for k, v in y.items() if not k.endswith("_m")}
+        for k in x:
+            if k.endswith("_m"):
+                assert float(x[k]) == pytest.approx(float(y[k]), rel=1e-9, abs=1e-18)
         with h5py.File(a / f"point{i:03d}.h5") as f, h5py.File(b / f"point{i:03d}.h5") as g:
             assert f["time"].shape == g["time"].shape == (4 if i == 0 else 2,)
             for name in ("time", "position", "orientation", "velocity"):
