@@ -6,7 +6,8 @@ the thesis's statements.
     python scenes/thesis_ch5.py                      # table and figures from the runs on disk
 
 Runs go to results/ch5/<scene>/pointNNN.h5 (the sweep's grid order); this writes
-results/ch5/summary.csv (one row per case, lengths in nm) and results/ch5/<scene>.png: the free
+results/ch5/summary.csv (one row per case, lengths in nm; the lone cell of
+reference_free_cell.toml gives the sedimentation to subtract) and results/ch5/<scene>.png: the free
 cell's height change Z(t) - Z(0) for every case, one panel per value of the scene's first sweep
 axis when it has two (as the thesis's figures pair them), and the closest surface gap.
 """
@@ -22,7 +23,8 @@ import h5py
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-SCENES = ["fig5_03_sphere_glance", "fig5_04_05_shapes", "fig5_07_dome_glance", "fig5_09_box_glance",
+REFERENCE = "reference_free_cell"
+SCENES = [REFERENCE, "fig5_03_sphere_glance", "fig5_04_05_shapes", "fig5_07_dome_glance", "fig5_09_box_glance",
           "fig5_11_two_domes", "fig5_12_two_boxes", "fig5_13_14_near_wall", "fig5_16_17_shear",
           "fig5_18_neutral", "fig5_19_20_glance"]
 
@@ -35,19 +37,39 @@ def cases(scene_name):
     return path, grid([], scene.load(path).sweep)
 
 
-def free_cell_metrics(h5_path) -> dict:
-    """Height change of the free cell (nm): largest rise, deepest drop, at the end; its lateral
-    drift; the smallest surface gap to anything (nm) and the run's extent."""
+def free_cell_metrics(h5_path, references) -> dict:
+    """Height change of the free cell (nm): largest rise, deepest drop, at the end; what
+    sedimentation alone gives over the same time from the same height (``references``: start
+    height in um -> (t, z) of the lone cell; zero without gravity) and the rest, the adherent
+    cells' effect; its lateral drift; the smallest surface gap to anything (nm)."""
     with h5py.File(h5_path, "r") as f:
         names = json.loads(f.attrs["body_names"])
         i = names.index("free") if "free" in names else 0
+        t = f["time"][:]
         z = f["position"][:, i, 2]
         y = f["position"][:, i, 1]
         x = f["position"][:, i, 0]
-        return {"rise_nm": 1e9 * max(z.max() - z[0], 0.0), "drop_nm": 1e9 * min(z.min() - z[0], 0.0),
-                "final_dz_nm": 1e9 * (z[-1] - z[0]), "final_dy_nm": 1e9 * (y[-1] - y[0]),
-                "closest_gap_nm": 1e9 * float(np.min(f["closest_gap"][:])), "end_time_s": float(f["time"][-1]),
-                "end_x_um": 1e6 * x[-1], "steps": int(len(z) - 1)}
+        gravity = json.loads(f.attrs["scene"]).get("physics", {}).get("gravity", False)
+        closest = float(np.min(f["closest_gap"][:]))
+    settling = 0.0
+    if gravity:
+        ref_t, ref_z = references[round(z[0] * 1e6, 2)]
+        settling = float(np.interp(t[-1], ref_t, ref_z) - ref_z[0])
+    return {"rise_nm": 1e9 * max(z.max() - z[0], 0.0), "drop_nm": 1e9 * min(z.min() - z[0], 0.0),
+            "final_dz_nm": 1e9 * (z[-1] - z[0]), "settling_alone_nm": 1e9 * settling,
+            "adherent_effect_nm": 1e9 * (z[-1] - z[0] - settling), "final_dy_nm": 1e9 * (y[-1] - y[0]),
+            "closest_gap_nm": 1e9 * closest, "end_time_s": float(t[-1]), "end_x_um": 1e6 * x[-1],
+            "steps": int(len(z) - 1)}
+
+
+def reference_curves(results) -> dict:
+    """Start height (um) -> (t, z) of the lone free cell of reference_free_cell.toml."""
+    curves = {}
+    for f in sorted((results / REFERENCE).glob("point*.h5")):
+        with h5py.File(f, "r") as h:
+            z = h["position"][:, 0, 2]
+            curves[round(z[0] * 1e6, 2)] = (h["time"][:], z)
+    return curves
 
 
 def plot(scene_name, rows, out_png):
@@ -103,6 +125,7 @@ def main():
     args = parser.parse_args()
     results = Path(args.results)
     table = []
+    references = {}
     for name in SCENES:
         path, points = cases(name)
         folder = results / name
@@ -112,8 +135,10 @@ def main():
 
             sweep(path, [], folder, workers=args.workers)
         rows = [{"labels": labels, "file": f} for (labels, _), f in zip(points, files) if f.exists()]
+        if name == REFERENCE:
+            references = reference_curves(results)
         for r in rows:
-            r.update(free_cell_metrics(r["file"]))
+            r.update(free_cell_metrics(r["file"], references))
             table.append({"scene": name, "case": ", ".join(f"{k} {v}" for k, v in r["labels"].items()),
                           **{k: v for k, v in r.items() if k not in ("labels", "file")}})
         if rows:
@@ -124,10 +149,12 @@ def main():
         writer = csv.DictWriter(f, fieldnames=list(table[0]))
         writer.writeheader()
         writer.writerows(table)
-    print("| scene | case | rise [nm] | drop [nm] | final dZ [nm] | closest gap [nm] | t end [s] |")
-    print("|---|---|---|---|---|---|---|")
+    print("| scene | case | rise | deepest | final dZ | settling alone | adherent cells' effect | final dY |"
+          " closest gap | t end [s] |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in table:
         print(f"| {r['scene']} | {r['case']} | {r['rise_nm']:.0f} | {r['drop_nm']:.0f} | {r['final_dz_nm']:.0f}"
+              f" | {r['settling_alone_nm']:.0f} | {r['adherent_effect_nm']:.0f} | {r['final_dy_nm']:.0f}"
               f" | {r['closest_gap_nm']:.0f} | {r['end_time_s']:.3f} |")
 
 
