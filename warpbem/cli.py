@@ -22,6 +22,7 @@ def main(argv=None) -> int:
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a scene value")
     run.add_argument("--device", default="cpu")
     run.add_argument("--resume", action="store_true", help="continue the run in --output from its last frame")
+    run.add_argument("--overwrite", action="store_true", help="replace an existing --output file")
     sweep = sub.add_parser("sweep", help="run a scene over a grid of values (one HDF5 per point, summary.csv)")
     sweep.add_argument("scene")
     sweep.add_argument("--vary", action="append", default=[], metavar="KEY=V1,V2,...",
@@ -67,7 +68,7 @@ def main(argv=None) -> int:
             parser.error("run needs a SCENE file (or --resume with --output)")
         try:
             runner.run(args.scene, args.output, args.set, args.device, args.resume,
-                       progress=lambda line: print(line, flush=True))
+                       progress=lambda line: print(line, flush=True), overwrite=args.overwrite)
         except SceneError as err:
             print(f"warpbem run: {err}", file=sys.stderr)
             return 2

@@ -52,10 +52,13 @@ def build(scene: scenes.Scene, device="cpu") -> Simulator:
                      policy=StepPolicy(scene.dt_max, scene.dt_min, scene.contact_gap))
 
 
-def run(scene_path, output, overrides=(), device="cpu", resume=False, progress=print):
+def run(scene_path, output, overrides=(), device="cpu", resume=False, progress=print, overwrite=False):
     """Run a scene to its end time. With ``resume``, ``output`` must be an earlier run of the
-    same scene: the scene stored in it is used and stepping continues from its last frame."""
+    same scene: the scene stored in it is used and stepping continues from its last frame. An
+    existing ``output`` is replaced only with ``overwrite`` (nothing written is lost by mistake)."""
     output = Path(output)
+    if output.exists() and not resume and not overwrite:
+        raise scenes.SceneError(f"{output} exists: --resume continues it, --overwrite replaces it")
     if resume:
         with h5py.File(output, "r") as f:
             stored = json.loads(f.attrs["scene"])

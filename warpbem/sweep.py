@@ -77,7 +77,7 @@ def grid(varies, scene_axes=None) -> list[tuple[dict, list[str]]]:
 
 def _run_point(args):
     scene_path, output, labels, overrides, device = args
-    runner.run(scene_path, output, overrides, device, progress=lambda line: None)
+    runner.run(scene_path, output, overrides, device, progress=lambda line: None, overwrite=True)
     with h5py.File(output, "r") as f:
         start, end = f["position"][0], f["position"][-1]
         names = json.loads(f.attrs["body_names"])

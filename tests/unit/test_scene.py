@@ -111,6 +111,13 @@ def test_cli_run_reports_bad_scenes_and_runs_good_ones(tmp_path, capsys):
         assert f["time"][0] == 0.0 and f["time"][-1] == pytest.approx(0.6) and f["force"].shape[1:] == (1, 3)
     assert cli.main(["plot", str(tmp_path / "good.h5")]) == 0
     assert (tmp_path / "good.png").stat().st_size > 10_000
+    # an earlier run is never replaced by mistake
+    frames = h5py.File(tmp_path / "good.h5", "r")["time"].shape
+    assert cli.main(["run", str(path), "--output", str(tmp_path / "good.h5"), "--set", "time.end=0.2"]) == 2
+    assert "exists: --resume continues it, --overwrite replaces it" in capsys.readouterr().err
+    assert h5py.File(tmp_path / "good.h5", "r")["time"].shape == frames
+    assert cli.main(["run", str(path), "--output", str(tmp_path / "good.h5"), "--set", "time.end=0.2", "--overwrite"]) == 0
+    assert h5py.File(tmp_path / "good.h5", "r")["time"][-1] == pytest.approx(0.2)
 
 
 @pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")  # the adherent cell, as in the README
