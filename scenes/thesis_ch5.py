@@ -68,6 +68,8 @@ def free_cell_metrics(h5_path, references) -> dict:
     def settling(time):
         if not scene.get("physics", {}).get("gravity", False) or not np.isfinite(time):
             return 0.0 if np.isfinite(time) else np.nan
+        if round(z[0] * 1e6, 2) not in references:  # reference_free_cell.toml not run for this height
+            return np.nan
         ref_t, ref_z = references[round(z[0] * 1e6, 2)]
         return float(np.interp(time, ref_t, ref_z) - ref_z[0])
 
