@@ -102,12 +102,13 @@ def test_all_kernels_compile_for_cuda():
     NVRTC (no GPU needed). Skips cleanly where Warp has no CUDA compiler."""
     wp = runtime.init()
     from warpbem.kernels.assembly import build_kernels
+    from warpbem.kernels.contact import build_contact_kernels
 
     for dtype in (wp.float64, wp.float32):
         for wall in (False, True):
             k = build_kernels(dtype, wall)
             for kernel in (k.assemble_entries, k.gather_entries, k.apply_matrix_free, k.same_body_row_sums,
-                           k.point_force_velocity, k.dense_matvec):
+                           k.point_force_velocity, k.dense_matvec, build_contact_kernels(dtype).closest_points):
                 with tempfile.TemporaryDirectory() as out:
                     try:
                         files = wp.compile_aot_module(kernel.module, arch=90, module_dir=out, use_ptx=True)
