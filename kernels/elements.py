@@ -46,8 +46,8 @@ def make_element_functions(dtype) -> SimpleNamespace:
         return dtype(1.0)
 
     @wp.func
-    def quad9_point(nodes: wp.array(dtype=vec3), element: int, s: dtype, t: dtype):
-        """Position and x_s x x_t (outward normal times Jacobian) at (s, t) of an element."""
+    def quad9_frame(nodes: wp.array(dtype=vec3), element: int, s: dtype, t: dtype):
+        """Position and tangents x, x_s, x_t at (s, t) of an element."""
         x = vec3()
         xs = vec3()
         xt = vec3()
@@ -60,14 +60,18 @@ def make_element_functions(dtype) -> SimpleNamespace:
             x += p * (ls * lt)
             xs += p * (lagrange_slope(s, i) * lt)
             xt += p * (ls * lagrange_slope(t, j))
+        return x, xs, xt
+
+    @wp.func
+    def quad9_point(nodes: wp.array(dtype=vec3), element: int, s: dtype, t: dtype):
+        """Position and x_s x x_t (outward normal times Jacobian) at (s, t) of an element."""
+        x, xs, xt = quad9_frame(nodes, element, s, t)
         return x, wp.cross(xs, xt)
 
     @wp.func
     def quad9_second_order(nodes: wp.array(dtype=vec3), element: int, s: dtype, t: dtype):
         """x, x_s, x_t, x_ss, x_st, x_tt at (s, t): the data of a Newton step on the surface."""
-        x = vec3()
-        xs = vec3()
-        xt = vec3()
+        x, xs, xt = quad9_frame(nodes, element, s, t)
         xss = vec3()
         xst = vec3()
         xtt = vec3()
@@ -75,16 +79,9 @@ def make_element_functions(dtype) -> SimpleNamespace:
             p = nodes[element * 9 + a]
             i = NODE_S[a]
             j = NODE_T[a]
-            ls = lagrange(s, i)
-            lt = lagrange(t, j)
-            ds = lagrange_slope(s, i)
-            dt = lagrange_slope(t, j)
-            x += p * (ls * lt)
-            xs += p * (ds * lt)
-            xt += p * (ls * dt)
-            xss += p * (lagrange_curvature(i) * lt)
-            xst += p * (ds * dt)
-            xtt += p * (ls * lagrange_curvature(j))
+            xss += p * (lagrange_curvature(i) * lagrange(t, j))
+            xst += p * (lagrange_slope(s, i) * lagrange_slope(t, j))
+            xtt += p * (lagrange(s, i) * lagrange_curvature(j))
         return x, xs, xt, xss, xst, xtt
 
     return SimpleNamespace(vec3=vec3, lagrange=lagrange, lagrange_slope=lagrange_slope,
