@@ -38,6 +38,27 @@ def _spheres(element_nodes):
     return centres, radii
 
 
+def outer_radius(mesh) -> float:
+    """Radius of the sphere about the reference point that holds every node of ``mesh`` (m)."""
+    return float(np.linalg.norm(mesh.nodes, axis=1).max())
+
+
+def candidate_pairs(positions, outer_radii, fixed, wall: bool, within: float) -> list[tuple[int, int]]:
+    """(i, j) with body i free and j another body or WALL whose bounding spheres (``outer_radii``
+    about ``positions``) come closer than ``within`` (m): the only pairs whose surface gap can be
+    below ``within``. Each pair of free bodies appears once; fixed bodies are never ``i``."""
+    pairs = []
+    for i in np.flatnonzero(~np.asarray(fixed, dtype=bool)):
+        if wall and positions[i][2] - outer_radii[i] < within:
+            pairs.append((int(i), WALL))
+        for j in range(len(positions)):
+            if j == i or (not fixed[j] and j < i):
+                continue
+            if np.linalg.norm(np.subtract(positions[i], positions[j])) - outer_radii[i] - outer_radii[j] < within:
+                pairs.append((int(i), j))
+    return pairs
+
+
 class GapFinder:
     """Exact gaps between bodies (``Body`` objects) on a Warp device (float64)."""
 

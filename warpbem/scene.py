@@ -242,23 +242,19 @@ def load(path, overrides=()) -> Scene:
 def _check_roughness(scene: Scene):
     """With repulsion on, the roughness layers of a free body must not start in contact
     (thesis eq. 3.1 diverges there)."""
-    from .contact import WALL, GapFinder
+    from .contact import WALL, GapFinder, candidate_pairs, outer_radius
 
     bodies, finder, rep = scene.initial_bodies(), GapFinder(), scene.repulsion
-    outer = [np.linalg.norm(b.mesh.nodes, axis=1).max() for b in bodies]
-    for i, body in enumerate(bodies):
-        if body.fixed:
-            continue
-        others = [WALL] if scene.wall else []
-        others += [j for j in range(len(bodies)) if j != i
-                   and np.linalg.norm(body.position - bodies[j].position) - outer[i] - outer[j] < 1e-6]
-        for j in others:
-            gap = finder.between(bodies, i, j).distance
-            if rep.separation(gap, j == WALL) <= 0:
-                other = "the wall" if j == WALL else f"bodies.{j}"
-                raise SceneError(f"bodies.{i}.position: its roughness layer touches that of {other} (gap"
-                                 f" {gap:.4g} m; with repulsion on the gap must exceed"
-                                 f" {rep.cell_roughness + (rep.wall_roughness if j == WALL else rep.cell_roughness):.4g} m)")
+    layers = rep.cell_roughness + max(rep.cell_roughness, rep.wall_roughness)  # the thickest pair
+    pairs = candidate_pairs([b.position for b in bodies], [outer_radius(b.mesh) for b in bodies],
+                            [b.fixed for b in bodies], scene.wall, 2.0 * layers)
+    for i, j in pairs:
+        gap = finder.between(bodies, i, j).distance
+        if rep.separation(gap, j == WALL) <= 0:
+            other = "the wall" if j == WALL else f"bodies.{j}"
+            raise SceneError(f"bodies.{i}.position: its roughness layer touches that of {other} (gap"
+                             f" {gap:.4g} m; with repulsion on the gap must exceed"
+                             f" {rep.cell_roughness + (rep.wall_roughness if j == WALL else rep.cell_roughness):.4g} m)")
 
 
 def body_arrays(scene: Scene):

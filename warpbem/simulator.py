@@ -18,7 +18,7 @@ import numpy as np
 
 from . import integrate
 from .body import Body
-from .contact import WALL, GapFinder
+from .contact import WALL, GapFinder, candidate_pairs, outer_radius
 from .mobility import MobilitySolver
 from .placement import PlacementError, check_placement
 from .repulsion import Repulsion
@@ -79,7 +79,7 @@ class Simulator:
         self.external_force[:, 2] -= (densities - fluid_density) * volumes * gravity
         self.external_force[self.fixed] = 0.0
         self.external_torque[self.fixed] = 0.0
-        self.outer_radii = np.array([np.linalg.norm(m.nodes, axis=1).max() for m in self.meshes])
+        self.outer_radii = np.array([outer_radius(m) for m in self.meshes])
         self.last_contacts = []  # (Gap, separation eps, force) of the latest evaluation
 
     def bodies(self, state: integrate.State) -> list[Body]:
@@ -87,19 +87,7 @@ class Simulator:
                 for m, p, q, f in zip(self.meshes, state.positions, state.orientations, self.fixed)]
 
     def _pairs(self, state: integrate.State, within: float):
-        """(i, j) with body i free and j another body or WALL whose bounding spheres are closer
-        than ``within`` (m)."""
-        pairs = []
-        for i in np.flatnonzero(~self.fixed):
-            if self.solver.wall and state.positions[i, 2] - self.outer_radii[i] < within:
-                pairs.append((int(i), WALL))
-            for j in range(len(self.meshes)):
-                if j == i or (not self.fixed[j] and j < i):
-                    continue
-                gap = np.linalg.norm(state.positions[i] - state.positions[j]) - self.outer_radii[i] - self.outer_radii[j]
-                if gap < within:
-                    pairs.append((int(i), j))
-        return pairs
+        return candidate_pairs(state.positions, self.outer_radii, self.fixed, self.solver.wall, within)
 
     def velocities(self, state: integrate.State, dt: float | None = None, checked: bool = False):
         """(U, Omega) of every body over a step dt (s) from ``state`` (the contact forces are
@@ -116,7 +104,7 @@ class Simulator:
 
     def _with_repulsion(self, state, bodies, sol, dt):
         rep = self.repulsion
-        speed = np.abs(sol.velocity).max() + (np.abs(sol.angular_velocity).max(axis=None) * self.outer_radii.max())
+        speed = np.abs(sol.velocity).max() + (np.abs(sol.angular_velocity).max() * self.outer_radii.max())
         reach = rep.reach + 2.0 * rep.cell_roughness + 2.0 * speed * dt
         contacts = []
         for i, j in self._pairs(state, reach):
