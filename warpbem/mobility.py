@@ -141,6 +141,8 @@ class CompletedDoubleLayer:
             self.modes.append(scipy.linalg.solve_triangular(factor, raw.T, lower=True).T)
             self.cholesky.append(factor)
         self.unchanged = geometry.unchanged_bodies(previous.geometry if previous else None)
+        self.factors = None  # LU of each body's block (None: not factored), see preconditioner
+        self._block_jacobi = None
         self.fixed_columns = self._fixed_body_columns(previous)
         # load per unit rigid coefficient: makes <phi_l, V(s_l e_l)> = 1 (rigid block ~ identity)
         self.load_per_coefficient = np.zeros(self.fixed_columns.shape[1])
@@ -224,11 +226,12 @@ class CompletedDoubleLayer:
     def linear_operator(self) -> spla.LinearOperator:
         return spla.LinearOperator((self.size, self.size), matvec=self.matvec, dtype=np.float64)
 
-    def body_block(self, body: int) -> np.ndarray:
-        """The diagonal block of ``matvec`` for one body's density (dense operators only):
-        D (I - Pi) + Pi (free) or + C L Pi (fixed: its load columns), Pi = Phi Phi^T W."""
+    def body_block(self, body: int, dense: np.ndarray) -> np.ndarray:
+        """The diagonal block of ``matvec`` for one body's density, from the host copy ``dense``
+        of the operator's matrix: D (I - Pi) + Pi (free) or + C L Pi (fixed: its load columns),
+        Pi = Phi Phi^T W."""
         rows = self.ranges[body]
-        matrix = self.operator.assemble().numpy()[rows, rows].astype(np.float64)
+        matrix = dense[rows, rows].astype(np.float64)
         modes, weighted = self.modes[body], self.modes[body].T * self.weights[rows]  # Pi = modes @ weighted
         block = matrix - (matrix @ modes) @ weighted
         if self.fixed[body]:
@@ -248,15 +251,17 @@ class CompletedDoubleLayer:
         Dense operators only (a matrix-free body block would need its own assembly)."""
         if self.operator.mode != "dense":
             return None
+        if self.factors is not None:  # built for this system already
+            return self._block_jacobi
+        old = previous.factors if previous is not None and previous.factors is not None else []
+        dense = None
         self.factors = []
         for p, rows in enumerate(self.ranges):
-            kept = (previous is not None and getattr(previous, "factors", None) and self.unchanged[p]
-                    and p < len(previous.factors) and previous.fixed[p] == self.fixed[p]
-                    and previous.factors[p] is not None)
-            if kept:
-                self.factors.append(previous.factors[p])
+            if p < len(old) and old[p] is not None and self.unchanged[p] and previous.fixed[p] == self.fixed[p]:
+                self.factors.append(old[p])
             elif self.fixed[p] or rows.stop - rows.start <= FACTOR_LIMIT:
-                self.factors.append(scipy.linalg.lu_factor(self.body_block(p)))
+                dense = self.operator.assemble().numpy() if dense is None else dense  # one copy off a GPU
+                self.factors.append(scipy.linalg.lu_factor(self.body_block(p, dense)))
             else:
                 self.factors.append(None)
 
@@ -267,7 +272,8 @@ class CompletedDoubleLayer:
                     out[rows] = scipy.linalg.lu_solve(factor, r[rows])
             return out
 
-        return spla.LinearOperator((self.size, self.size), matvec=apply, dtype=np.float64)
+        self._block_jacobi = spla.LinearOperator((self.size, self.size), matvec=apply, dtype=np.float64)
+        return self._block_jacobi
 
     def rigid_velocity(self, body: int, x: np.ndarray) -> np.ndarray:
         """(U, Omega) of a free body in scaled units: the rigid field -P_p q."""
@@ -376,11 +382,9 @@ class MobilitySolver:
         if initial_guess is None and previous is not None and background:
             # the previous solution is in the previous scaling: rescale the loads part with it
             initial_guess = system.initial_guess(previous, self._last[1] * (self._last[2] / speed))
-        if system is not previous or not hasattr(system, "block_jacobi"):
-            system.block_jacobi = system.preconditioner(previous) if self.precondition else None
         result = gmres(system.linear_operator(), rhs, tolerance=self.tolerance,
                        max_iterations=self.max_iterations, initial_guess=initial_guess,
-                       preconditioner=system.block_jacobi)
+                       preconditioner=system.preconditioner(previous) if self.precondition else None)
         x = result.solution
         if background or self._last is None or system is not self._last[0]:
             self._last = (system, x, speed, key)
