@@ -100,7 +100,7 @@ def plot(scene_name, rows, out_png):
 
     axes_names = [k for k in rows[0]["labels"]]
     panel_axis = axes_names[0] if len(axes_names) == 2 else None
-    panels = sorted({r["labels"][panel_axis] for r in rows}, key=rows_order(rows, panel_axis)) if panel_axis else [None]
+    panels = list(dict.fromkeys(r["labels"][panel_axis] for r in rows)) if panel_axis else [None]  # in grid order
     fig, axes = plt.subplots(1, len(panels) + 1, figsize=(5 * (len(panels) + 1), 3.8), squeeze=False)
     for k, panel in enumerate(panels):
         ax = axes[0, k]
@@ -127,14 +127,6 @@ def plot(scene_name, rows, out_png):
     fig.tight_layout()
     fig.savefig(out_png, dpi=110)
     plt.close(fig)
-
-
-def rows_order(rows, axis):
-    order = []
-    for r in rows:
-        if r["labels"][axis] not in order:
-            order.append(r["labels"][axis])
-    return order.index
 
 
 def main():

@@ -20,7 +20,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from .body import rotation_matrix
+from .body import Body
 from .scene import SceneError, parse
 
 
@@ -57,8 +57,8 @@ def _read(run_path: Path):
 
 
 def _world_nodes(meshes, positions, orientations) -> np.ndarray:
-    """All bodies' nodes in the world frame, concatenated: x = R(q) X + position."""
-    return np.concatenate([m.nodes @ rotation_matrix(q / np.linalg.norm(q)).T + p
+    """All bodies' nodes in the world frame, concatenated."""
+    return np.concatenate([Body(m, position=p, orientation=q).world_nodes()
                            for m, p, q in zip(meshes, positions, orientations)])
 
 
