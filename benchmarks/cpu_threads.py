@@ -12,8 +12,8 @@ import numpy as np
 
 from common import best_time
 from warpbem import Body, mesh, runtime
-from warpbem.geometry import SurfaceGeometry
-from warpbem.operators import DoubleLayerOperator, QuadratureOptions
+from warpbem.hydro.geometry import SurfaceGeometry
+from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions
 
 
 def main():

@@ -22,8 +22,8 @@ import numpy as np
 import numpy_baseline
 from common import best_time, output, print_table, pyplot, write_csv
 from warpbem import Body, ContactResolutionWarning, MobilitySolver, mesh, runtime
-from warpbem.geometry import SurfaceGeometry
-from warpbem.operators import DoubleLayerOperator, QuadratureOptions
+from warpbem.hydro.geometry import SurfaceGeometry
+from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions
 
 
 def cpu_seconds():

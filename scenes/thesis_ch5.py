@@ -30,8 +30,8 @@ SCENES = [REFERENCE, "fig5_03_sphere_glance", "fig5_04_05_shapes", "fig5_07_dome
 
 
 def cases(scene_name):
-    from warpbem import scene
-    from warpbem.sweep import grid
+    from warpbem.app import scene
+    from warpbem.app.sweep import grid
 
     path = HERE / f"{scene_name}.toml"
     return path, grid([], scene.load(path).sweep)
@@ -143,7 +143,7 @@ def main():
         folder = results / name
         files = [folder / f"point{i:03d}.h5" for i in range(len(points))]
         if args.run and not all(f.exists() for f in files):
-            from warpbem.sweep import sweep
+            from warpbem.app.sweep import sweep
 
             sweep(path, [], folder, workers=args.workers)
         rows = [{"labels": labels, "file": f} for (labels, _), f in zip(points, files) if f.exists()]

@@ -1,12 +1,17 @@
 """warpbem: boundary-element Stokes flow of rigid (and, later, elastic) cells above a no-slip
-wall, on NVIDIA Warp. Importing the package compiles nothing and touches no device."""
+wall, on NVIDIA Warp. Importing the package compiles nothing and touches no device.
 
-from . import mesh, units
-from .body import Body
-from .linalg import ConvergenceError
-from .mesh import MeshError
-from .mobility import ContactResolutionWarning, MobilitySolution, MobilitySolver, solve_mobility
-from .placement import PlacementError
+Layers (each imports only those before it): ``surfaces`` (meshes, bodies, gaps) ->
+``hydro`` (operators, GMRES, mobility) and ``forces`` (interactions) -> ``dynamics`` (Model,
+State, the step) -> ``app`` (scene files, runs, sweeps, output, command line)."""
+
+from . import units
+from .hydro.linalg import ConvergenceError
+from .hydro.mobility import ContactResolutionWarning, MobilitySolution, MobilitySolver, solve_mobility
+from .surfaces import mesh
+from .surfaces.body import Body
+from .surfaces.mesh import MeshError
+from .surfaces.placement import PlacementError
 
 __version__ = "0.1.0"
 __all__ = ["mesh", "units", "Body", "solve_mobility", "MobilitySolver", "MobilitySolution", "ConvergenceError",

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from warpbem import integrate
-from warpbem.body import rotation_matrix
+from warpbem.dynamics import integrate
+from warpbem.surfaces.body import rotation_matrix
 
 
 def test_rotation_is_exact_for_constant_angular_velocity():

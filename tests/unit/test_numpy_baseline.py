@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 
 from warpbem import Body, mesh
-from warpbem.geometry import SurfaceGeometry
-from warpbem.operators import DoubleLayerOperator, QuadratureOptions
+from warpbem.hydro.geometry import SurfaceGeometry
+from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 import numpy_baseline  # noqa: E402

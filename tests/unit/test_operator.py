@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from warpbem import Body, mesh, runtime
-from warpbem.geometry import SurfaceGeometry
-from warpbem.mobility import CompletedDoubleLayer
-from warpbem.operators import DoubleLayerOperator, QuadratureOptions
+from warpbem.hydro.geometry import SurfaceGeometry
+from warpbem.hydro.mobility import CompletedDoubleLayer
+from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions
 
 
 def make_operator(bodies, wall, mode="dense", device="cpu", **quadrature):

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from warpbem import mesh, quad9, runtime
+from warpbem import mesh, runtime
+from warpbem.surfaces import quad9
 
 
 def test_shape_functions_interpolate_nodes_and_sum_to_one():

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 import warpbem as wb
-from warpbem import quad9
-from warpbem.contact import WALL, GapFinder
-from warpbem.placement import signed_distance
-from warpbem.repulsion import Repulsion
+from warpbem.surfaces import quad9
+from warpbem.surfaces.gaps import WALL, GapFinder
+from warpbem.surfaces.placement import signed_distance
+from warpbem.forces.repulsion import Repulsion
 
 
 def test_force_law_is_thesis_eq_3_1_and_the_gradient_of_its_potential():

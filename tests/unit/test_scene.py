@@ -6,7 +6,8 @@ import h5py
 import numpy as np
 import pytest
 
-from warpbem import mesh, run, scene
+from warpbem import mesh
+from warpbem.app import run, scene
 
 BASE = {
     "flow": {"shear_rate": 0.0, "viscosity": 1e-3},
@@ -67,8 +68,8 @@ def test_overrides_and_mesh_files(tmp_path):
     mesh.save(mesh.spheroid(5e-6, 0.7, subdivisions=2), tmp_path / "cell.q9")
     table["bodies"][0]["mesh"] = {"shape": "file", "path": "cell.q9"}
     s = scene.load(write(tmp_path, table), ["flow.shear_rate=80", "bodies.0.position=[0.0, 2e-6, 9e-6]"])
-    assert s.shear_rate == 80.0 and s.bodies[0][2] == (0.0, 2e-6, 9e-6)
-    assert s.bodies[0][1].n_elements == 24
+    assert s.model.flow.shear_rate == 80.0 and s.bodies[0].position == (0.0, 2e-6, 9e-6)
+    assert s.bodies[0].mesh.n_elements == 24
     with pytest.raises(scene.SceneError, match="expected key=value"):
         scene.load(write(tmp_path, table), ["flow.shear_rate"])
 
@@ -100,7 +101,7 @@ def test_interrupted_run_resumes_to_the_same_end(tmp_path):
 
 
 def test_cli_run_reports_bad_scenes_and_runs_good_ones(tmp_path, capsys):
-    from warpbem import cli
+    from warpbem.app import cli
 
     path = write(tmp_path, BASE)
     assert cli.main(["run", str(path), "--output", str(tmp_path / "bad.h5"), "--set", "flow.viscosty=1"]) == 2
@@ -123,7 +124,7 @@ def test_cli_run_reports_bad_scenes_and_runs_good_ones(tmp_path, capsys):
 @pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")  # the adherent cell, as in the README
 def test_demo_writes_units_and_metadata_and_a_chart(tmp_path):
     """The main job on two positions: HDF5 with units, scene, versions and seed, and its PNG."""
-    from warpbem import cli
+    from warpbem.app import cli
 
     out = tmp_path / "demo.h5"
     assert cli.main(["demo", "--output", str(out), "--positions", "2"]) == 0
@@ -141,7 +142,7 @@ def test_demo_writes_units_and_metadata_and_a_chart(tmp_path):
 def test_sweep_runs_the_grid_and_summarises(tmp_path):
     """Two viscosities x two heights: four files and a summary. Settling speed goes as 1/mu:
     doubling the viscosity halves the height lost (within the wall correction's change)."""
-    from warpbem import sweep
+    from warpbem.app import sweep
 
     assert sweep.split_values("1,[2,3],4") == ["1", "[2,3]", "4"]
     with pytest.raises(scene.SceneError, match="cannot split"):
@@ -161,7 +162,7 @@ def test_sweep_runs_the_grid_and_summarises(tmp_path):
 
 
 def test_sweep_in_worker_processes_matches_serial(tmp_path):
-    from warpbem import sweep
+    from warpbem.app import sweep
 
     path = write(tmp_path, BASE)
     varies = ["flow.viscosity=1e-3,2e-3"]
@@ -180,7 +181,7 @@ def test_every_shipped_scene_is_valid():
     folder = Path(__file__).resolve().parents[2] / "scenes"
     files = sorted(folder.glob("*.toml"))
     assert len(files) >= 14
-    from warpbem.sweep import grid
+    from warpbem.app.sweep import grid
 
     for path in files:
         s = scene.load(path)
@@ -205,18 +206,20 @@ THESIS_CASES = [
 def test_thesis_scenes_place_the_cells_as_the_thesis_does(name, x, z, glances, heights):
     from pathlib import Path
 
-    from warpbem.sweep import grid
+    from warpbem.app.sweep import grid
 
     path = Path(__file__).resolve().parents[2] / "scenes" / f"{name}.toml"
     seen_glances, seen_heights = set(), set()
     for _, overrides in grid([], scene.load(path).sweep):
         s = scene.load(path, overrides)
-        free = [b for b in s.bodies if not b[4]]
-        assert len(free) == 1 and free[0][2][0] == pytest.approx(x * 1e-6) and free[0][2][2] == pytest.approx(z * 1e-6)
-        seen_glances.add(round(free[0][2][1] * 1e6, 6))
-        fixed = [b for b in s.bodies if b[4]]
-        seen_heights |= {round(b[2][2] * 1e6, 6) for b in fixed}
-        assert s.shear_rate == 100.0 and s.repulsion is not None and s.repulsion.inverse_length == 2e9
+        free = [b for b in s.bodies if not b.fixed]
+        assert len(free) == 1 and free[0].position[0] == pytest.approx(x * 1e-6)
+        assert free[0].position[2] == pytest.approx(z * 1e-6)
+        seen_glances.add(round(free[0].position[1] * 1e6, 6))
+        fixed = [b for b in s.bodies if b.fixed]
+        seen_heights |= {round(b.position[2] * 1e6, 6) for b in fixed}
+        repulsion = s.model.interaction("repulsion")
+        assert s.model.flow.shear_rate == 100.0 and repulsion is not None and repulsion.inverse_length == 2e9
         if name.startswith("fig5_1") and "two" in name:  # two adherent cells 30 um apart in the flow
-            assert sorted(b[2][0] for b in fixed) == pytest.approx([0.0, 30e-6])
+            assert sorted(b.position[0] for b in fixed) == pytest.approx([0.0, 30e-6])
     assert seen_glances == set(glances) and seen_heights == heights

@@ -6,7 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from warpbem import mesh, shapes
+from warpbem import mesh
+from warpbem.surfaces import shapes
 
 SCENES = Path(__file__).resolve().parents[2] / "scenes"
 

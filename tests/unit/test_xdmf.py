@@ -11,8 +11,9 @@ import h5py
 import numpy as np
 import pytest
 
-from warpbem import cli, quad9, run, scene, xdmf
-from warpbem.body import rotation_matrix
+from warpbem.app import cli, run, scene, xdmf
+from warpbem.surfaces import quad9
+from warpbem.surfaces.body import rotation_matrix
 
 from .test_scene import BASE, write
 

@@ -5,8 +5,9 @@ import numpy as np
 import pytest
 
 import warpbem as wb
-from warpbem.integrate import State
-from warpbem.simulator import Simulator, StepPolicy
+from warpbem.dynamics import Flow, Model, Simulator, State, StepPolicy
+from warpbem.forces import Gravity
+from warpbem.surfaces.body import rotation_matrix
 
 
 def test_free_sphere_in_wall_shear_keeps_its_height():
@@ -16,17 +17,17 @@ def test_free_sphere_in_wall_shear_keeps_its_height():
     54-element k = 3 sphere): over 0.2 s
     (20 sphere diameters of travel, 50 steps) the height stays within 1e-3 radius."""
     a = 5e-6
-    solver = wb.MobilitySolver(shear_rate=100.0, viscosity=1e-3)
-    sim = Simulator([wb.mesh.sphere(a, 3)], [False], solver, policy=StepPolicy(dt_max=4e-3, dt_min=1e-4))
+    sim = Simulator(Model([wb.mesh.sphere(a, 3)], [False], Flow(shear_rate=100.0, viscosity=1e-3),
+                          policy=StepPolicy(dt_max=4e-3, dt_min=1e-4)))
     state = State(0.0, np.array([[0.0, 0.0, 1.3 * a]]), np.array([[1.0, 0.0, 0.0, 0.0]]))
     heights, ratios = [], []
 
-    def record(s, motion, dt):
+    def record(s, frame):
         heights.append(s.positions[0, 2])
-        ratios.append(abs(motion[0][0, 2]) / motion[0][0, 0])
+        ratios.append(abs(frame.velocity[0, 2]) / frame.velocity[0, 0])
 
     state = sim.run(state, 0.2, callback=record)
-    assert len(heights) == 50
+    assert len(heights) == 50 and state.time == 0.2
     assert np.abs(np.array(heights) - 1.3 * a).max() < 1e-3 * a
     assert max(ratios) < 3e-4
     assert state.positions[0, 0] > 20 * a  # it did travel downstream
@@ -39,14 +40,13 @@ def test_jeffery_orbit_period_of_an_oblate_spheroid():
     plane; the axis turns about y (the vorticity). Target: period within 2 %."""
     r, gdot = 0.5, 1.0
     period = 2 * np.pi * (r + 1 / r) / gdot
-    solver = wb.MobilitySolver(shear_rate=gdot, viscosity=1.0, wall=False)
-    sim = Simulator([wb.mesh.spheroid(1.0, r, subdivisions=4)], [False], solver,
-                    policy=StepPolicy(dt_max=period / 150, dt_min=period / 150, contact_gap=1.0))
+    sim = Simulator(Model([wb.mesh.spheroid(1.0, r, subdivisions=4)], [False], Flow(gdot, 1.0, wall=False),
+                          policy=StepPolicy(dt_max=period / 150, dt_min=period / 150, contact_gap=1.0)))
     state = State(0.0, np.zeros((1, 3)), np.array([[1.0, 0.0, 0.0, 0.0]]))
     angles, times = [0.0], [0.0]
 
-    def record(s, motion, dt):
-        axis = wb.body.rotation_matrix(s.orientations[0])[:, 2]  # symmetry axis in the world
+    def record(s, frame):
+        axis = rotation_matrix(s.orientations[0])[:, 2]  # symmetry axis in the world
         angle = np.arctan2(axis[0], axis[2])
         previous = angles[-1]
         angles.append(previous + (angle - previous + np.pi) % (2 * np.pi) - np.pi)  # unwrap
@@ -64,12 +64,11 @@ def test_two_spheres_pass_symmetrically_in_unbounded_shear():
     flow is symmetric under the point reflection about their midpoint, so the trajectories are
     mirror images (the midpoint stays put), and reversible: each sphere leaves on the streamline
     it came in on (smooth spheres, no contact forces; Batchelor & Green 1972)."""
-    solver = wb.MobilitySolver(shear_rate=1.0, viscosity=1.0, wall=False)
-    sim = Simulator([wb.mesh.sphere(1.0, 3)] * 2, [False, False], solver,
-                    policy=StepPolicy(dt_max=0.4, dt_min=0.1, contact_gap=0.4))
+    sim = Simulator(Model([wb.mesh.sphere(1.0, 3)] * 2, [False, False], Flow(1.0, 1.0, wall=False),
+                          policy=StepPolicy(dt_max=0.4, dt_min=0.1, contact_gap=0.4)))
     state = State(0.0, np.array([[-3.0, 0.0, 0.8], [3.0, 0.0, -0.8]]), np.tile([1.0, 0, 0, 0], (2, 1)))
     heights = []
-    state = sim.run(state, 8.0, callback=lambda s, m, dt: heights.append(s.positions[0, 2]))
+    state = sim.run(state, 8.0, callback=lambda s, frame: heights.append(s.positions[0, 2]))
     np.testing.assert_allclose(state.positions[0], -state.positions[1], atol=1e-5)
     assert state.positions[0, 0] > 2.0  # they did pass
     assert max(heights) > 0.9  # lifted over each other on the way
@@ -80,24 +79,27 @@ def test_heavy_cell_settles_at_brenners_speed_and_the_step_shrinks():
     """A cell of 1050 kg/m^3 in plasma of 1000 kg/m^3 sinks (thesis fig. 2.5) at the speed its
     buoyant weight gives against Brenner's (1961) wall-corrected drag, W = F / (6 pi mu a
     lambda(h)); the adaptive step shortens as the gap falls below contact_gap, and it never
-    touches the wall."""
+    touches the wall. Each frame's velocity is the one at its own height (down to h/a = 1.11,
+    where the k = 4 sphere's squeeze drag is 1.5 % off: README accuracy table)."""
     from .sphere_wall_series import brenner_lambda
 
     a, mu = 5e-6, 1e-3
-    solver = wb.MobilitySolver(shear_rate=0.0, viscosity=mu)
-    sim = Simulator([wb.mesh.sphere(a, 3)], [False], solver, densities=[1050.0], gravity=9.81,
-                    policy=StepPolicy(dt_max=0.5, dt_min=0.05, contact_gap=1.5e-6))
-    weight = sim.external_force[0, 2]
-    assert np.isclose(weight, -50 * 9.81 * sim.meshes[0].volume())
+    m = wb.mesh.sphere(a, 4)
+    gravity = Gravity([m], [False], [1050.0], 1000.0, 9.81)
+    sim = Simulator(Model([m], [False], Flow(0.0, mu), interactions=[gravity],
+                          policy=StepPolicy(dt_max=0.5, dt_min=0.05, contact_gap=1.5e-6)))
+    weight = gravity.force[0, 2]
+    assert np.isclose(weight, -50 * 9.81 * m.volume())
     state = State(0.0, np.array([[0.0, 0.0, 7.0e-6]]), np.array([[1.0, 0, 0, 0]]))
     steps = []
 
-    def record(s, motion, dt):
-        steps.append((s.positions[0, 2], dt, motion[0][0, 2], s.positions[0, 2] - 0.5 * dt * motion[0][0, 2]))
+    def record(s, frame):
+        steps.append((s.positions[0, 2], frame.dt, frame.velocity[0, 2], frame.force[0, 2]))
 
     sim.run(state, 3.0, callback=record)
-    z, dt, w, z_mid = map(np.array, zip(*steps))
-    expected = np.array([weight / (6 * np.pi * mu * a * brenner_lambda(h / a)) for h in z_mid])
+    z, dt, w, force = map(np.array, zip(*steps))
+    assert np.all(force == weight)
+    expected = np.array([weight / (6 * np.pi * mu * a * brenner_lambda(h / a)) for h in z])
     np.testing.assert_allclose(w, expected, rtol=0.02)
     assert z.min() > a and np.all(np.diff(z) < 0)  # sinking, never touching
     assert dt[-1] < dt[0]  # the step shrank near the wall
@@ -109,13 +111,14 @@ def test_a_step_that_would_cross_the_wall_is_retried_shorter():
     the step's end) would cross the wall, so the step is halved until it does not, and the cell
     never touches. Too short a dt_min to ever allow that is an error that says so."""
     a = 5e-6
-    solver = wb.MobilitySolver(viscosity=1e-3)
-    sim = Simulator([wb.mesh.sphere(a, 2)], [False], solver, gravity=9.81, densities=[1.0e5],
-                    policy=StepPolicy(dt_max=5.0, dt_min=1e-3, contact_gap=1e-9))
+    m = wb.mesh.sphere(a, 2)
+    heavy = Gravity([m], [False], [1.0e5], 1000.0, 9.81)
+    sim = Simulator(Model([m], [False], Flow(0.0, 1e-3), interactions=[heavy],
+                          policy=StepPolicy(dt_max=5.0, dt_min=1e-3, contact_gap=1e-9)))
     state = State(0.0, np.array([[0.0, 0.0, 1.4 * a]]), np.array([[1.0, 0, 0, 0]]))
-    new, motion, dt = sim.step(state)
-    assert dt < 5.0 and new.positions[0, 2] > a
-    stiff = Simulator([wb.mesh.sphere(a, 2)], [False], solver, gravity=9.81, densities=[1.0e5],
-                      policy=StepPolicy(dt_max=5.0, dt_min=5.0, contact_gap=1e-9))
+    new, frame = sim.step(state)
+    assert frame.dt < 5.0 and new.time == frame.dt and new.positions[0, 2] > a
+    stiff = Simulator(Model([m], [False], Flow(0.0, 1e-3), interactions=[heavy],
+                            policy=StepPolicy(dt_max=5.0, dt_min=5.0, contact_gap=1e-9)))
     with pytest.raises(wb.PlacementError, match="even the smallest step"):
         stiff.step(state)

@@ -9,9 +9,8 @@ import numpy as np
 import pytest
 
 import warpbem as wb
-from warpbem.integrate import State
-from warpbem.repulsion import Repulsion
-from warpbem.simulator import STANDARD_GRAVITY, Simulator, StepPolicy
+from warpbem.dynamics import Flow, Model, Simulator, SolverOptions, State, StepPolicy
+from warpbem.forces import STANDARD_GRAVITY, ExternalLoads, Gravity, Repulsion
 
 A = 5e-6
 IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
@@ -25,9 +24,10 @@ def test_dense_cell_comes_to_rest_on_the_wall_at_the_balance_separation():
     monotonically and never goes below the balance."""
     m = wb.mesh.sphere(A, 2)
     rep = Repulsion()
-    solver = wb.MobilitySolver(0.0, 1.2e-3, True, contact_refinement=0.0)
-    sim = Simulator([m], [False], solver, densities=[1050.0], gravity=STANDARD_GRAVITY, repulsion=rep,
-                    policy=StepPolicy(dt_max=0.05, dt_min=1e-6, contact_gap=1e-9))
+    gravity = Gravity([m], [False], [1050.0], 1000.0, STANDARD_GRAVITY)
+    sim = Simulator(Model([m], [False], Flow(0.0, 1.2e-3), interactions=[gravity, rep],
+                          solver=SolverOptions(contact_refinement=0.0),
+                          policy=StepPolicy(dt_max=0.05, dt_min=1e-6, contact_gap=1e-9)))
     weight = 50.0 * m.volume() * STANDARD_GRAVITY
     expected = rep.balance_separation(weight)
     assert expected == pytest.approx(11.389e-9, rel=1e-4)
@@ -36,13 +36,16 @@ def test_dense_cell_comes_to_rest_on_the_wall_at_the_balance_separation():
     separations = []
     with pytest.warns(wb.ContactResolutionWarning):
         for _ in range(20):
-            state, _, dt = sim.step(state)
-            assert dt == 0.05
-            (gap, eps, force), = sim.last_contacts
-            separations.append(eps)
+            state, frame = sim.step(state)
+            assert frame.dt == 0.05
+            separations.append(rep.separation(frame.closest_gap, to_wall=True))
     assert np.all(np.diff(separations) <= 1e-15) and min(separations) > expected * (1 - 1e-9)
     assert separations[-1] == pytest.approx(expected, rel=1e-4)
-    assert sim.last_contacts[0][2] == pytest.approx(weight, rel=1e-3)
+    # the frame's repulsion is the law at its own gap, carrying the weight once at rest
+    repulsion = frame.loads["repulsion"].force[0]
+    assert repulsion[2] == pytest.approx(rep.force(separations[-1]), rel=1e-12)
+    assert repulsion[2] == pytest.approx(weight, rel=1e-3) and np.abs(repulsion[:2]).max() < 1e-9 * weight
+    assert abs(frame.velocity[0, 2]) * 0.05 < 1e-3 * expected  # at rest
 
 
 def test_pushed_sphere_stops_against_a_fixed_sphere():
@@ -54,21 +57,26 @@ def test_pushed_sphere_stops_against_a_fixed_sphere():
     m = wb.mesh.sphere(A, 4)
     rep = Repulsion(coefficient=1e-9)  # the top of the thesis's range
     push = 1e-11
-    solver = wb.MobilitySolver(0.0, 1.2e-3, False, contact_refinement=0.0)
     direction = np.array([1.0, 0.0, 0.0])
-    sim = Simulator([m, m], [False, True], solver, forces=[-push * direction, [0, 0, 0]], repulsion=rep,
-                    policy=StepPolicy(dt_max=0.005, dt_min=1e-6, contact_gap=1e-9))
+    sim = Simulator(Model([m, m], [False, True], Flow(0.0, 1.2e-3, wall=False),
+                          interactions=[ExternalLoads([False, True], [-push * direction, [0, 0, 0]], np.zeros((2, 3))),
+                                        rep],
+                          solver=SolverOptions(contact_refinement=0.0),
+                          policy=StepPolicy(dt_max=0.005, dt_min=1e-6, contact_gap=1e-9)))
     outer = np.linalg.norm(m.nodes, axis=1).max()
     state = State(0.0, np.array([(2 * outer + 0.4e-6) * direction, [0, 0, 0]]), np.array([IDENTITY, IDENTITY]))
     with pytest.warns(wb.ContactResolutionWarning):
         for _ in range(16):
-            state, motion, _ = sim.step(state)
-    (gap, eps, force), = sim.last_contacts
+            state, frame = sim.step(state)
+    eps = rep.separation(frame.closest_gap, to_wall=False)
     assert eps == pytest.approx(rep.balance_separation(push), rel=1e-3)
-    assert gap.distance == pytest.approx(eps + 2 * rep.cell_roughness, rel=1e-9)
-    assert force == pytest.approx(push, rel=1e-3)
-    np.testing.assert_allclose(sim.last_solution.force[1], push * direction, atol=2e-3 * push)  # holding load
-    assert np.abs(motion[1][0]).max() * A < 1e-12  # m/s, against an approach at ~1e-6 m/s
+    on_free, on_fixed = frame.loads["repulsion"].force
+    # the frame's force is the law at the frame's own separation, F0 tau / expm1(tau eps): it moves
+    # by tau d(eps) = 4.7 % per 1e-3 of eps here, so it carries the push to 2e-3 where eps is 1e-3 off
+    np.testing.assert_allclose(on_free, push * direction, rtol=2e-3, atol=1e-6 * push)  # along the line of centres
+    np.testing.assert_allclose(on_fixed, -on_free, rtol=1e-12)
+    np.testing.assert_allclose(frame.force[1], push * direction, atol=2e-3 * push)  # holding load
+    assert np.abs(frame.angular_velocity[0]).max() * A < 1e-12  # m/s, against an approach at ~1e-6 m/s
 
 
 def test_thesis_fig5_3_collision_never_overlaps(tmp_path):
@@ -80,7 +88,7 @@ def test_thesis_fig5_3_collision_never_overlaps(tmp_path):
     repulsion shows in the recorded loads only near contact."""
     import h5py
 
-    from warpbem import run
+    from warpbem.app import run
 
     scene = Path(__file__).resolve().parents[2] / "scenes" / "fig5_03_sphere_glance.toml"
     out = tmp_path / "collision.h5"
@@ -89,9 +97,11 @@ def test_thesis_fig5_3_collision_never_overlaps(tmp_path):
                 progress=lambda line: None)
     with h5py.File(out, "r") as f:
         gap, z, force = f["closest_gap"][:], f["position"][:, 0, 2], f["force"][:, 0]
+        repulsion_force = f["repulsion_force"][:, 0]
     weight = force[0]
     assert gap.min() > 2 * 175e-9 and gap.min() < 2 * 175e-9 + 30e-9  # touching the roughness tips
     assert z.max() - z[0] > 1e-6
+    np.testing.assert_allclose(force - weight, repulsion_force, rtol=0, atol=1e-9 * np.abs(weight).max())
     repulsion = np.linalg.norm(force - weight, axis=1)
     assert np.abs(repulsion[gap > 2 * 175e-9 + 200e-9]).max() < 1e-15
     assert repulsion[gap < 2 * 175e-9 + 8e-9].min() > 1e-13 and repulsion.max() > 1e-11  # tens of pN

@@ -6,10 +6,12 @@ viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
     [physics]                   gravity = false, fluid_density = 1000.0, repulsion = false
     [repulsion]                 coefficient = 1e-12 (F0, J), inverse_length = 2e9 (tau, 1/m),
                                 cell_roughness = 175e-9, wall_roughness = 50e-9 (thesis eq. 3.1;
-                                the unit convention of F0 is explained in warpbem/repulsion.py)
+                                the unit convention of F0 is explained in warpbem/forces/repulsion.py)
     [time]                      end = 0.01, dt_max = 1e-4, dt_min = 1e-5, contact_gap = 5e-7,
-                                scheme = "heun", frame_every = 10
-    [solver]                    quadrature_order = 2, contact_refinement = 3.0, tolerance = 1e-8,
+                                scheme = "heun", and frames by steps, frame_every = 1, or by
+                                time, frame_interval = 1e-3 (s; the steps land on frame times)
+    [solver]                    quadrature_order = 2, contact_refinement = 3.0, tolerance (GMRES;
+                                default 1e-8 for float64, 1e-6 for float32), dtype = "float64",
                                 refine_fixed_at_wall = true
     [[bodies]]                  name, position = [x, y, z], orientation = [w, x, y, z],
                                 fixed = false, density = 1000.0, force = [0, 0, 0] (N),
@@ -29,12 +31,16 @@ import math
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
-import numpy as np
-
-from . import mesh as meshes
-from .body import Body
-from .repulsion import Repulsion
+from ..dynamics.model import Flow, Model, SolverOptions, StepPolicy
+from ..dynamics.state import State
+from ..forces.external import STANDARD_GRAVITY, ExternalLoads, Gravity
+from ..forces.repulsion import Repulsion
+from ..surfaces import mesh as meshes
+from ..surfaces.body import Body
+from ..surfaces.gaps import WALL, Contacts, GapFinder
+from ..surfaces.placement import PlacementError, check_placement
 
 
 class SceneError(ValueError):
@@ -76,32 +82,53 @@ def _table(where, value, allowed, required=()):
     return value
 
 
+class BodySpec(NamedTuple):
+    """One [[bodies]] entry, validated: SI values, the mesh built."""
+
+    name: str
+    mesh: meshes.Mesh
+    position: tuple
+    orientation: tuple
+    fixed: bool
+    density: float
+    force: tuple
+    torque: tuple
+
+
 @dataclass(frozen=True)
 class Scene:
-    """A validated scene; ``raw`` keeps the checked table for the output file."""
+    """A validated scene: the ``model`` it describes, the start placement of its ``bodies``, the
+    run settings (end time, frames every ``frame_every`` steps or every ``frame_interval``
+    seconds) and its sweep axes; ``raw`` keeps the checked table for the output file."""
 
     raw: dict
-    bodies: tuple  # (name, Mesh, position, orientation, fixed, density, force, torque)
-    shear_rate: float
-    viscosity: float
-    wall: bool
-    gravity: bool
-    fluid_density: float
-    repulsion: Repulsion | None
+    bodies: tuple  # BodySpec per body
+    model: Model
     end: float
-    dt_max: float
-    dt_min: float
-    contact_gap: float
-    scheme: str
-    frame_every: int
-    quadrature_order: int
-    contact_refinement: float
-    tolerance: float
-    refine_fixed_at_wall: bool
+    frame_every: int | None
+    frame_interval: float | None
     sweep: dict  # {axis: {label: [key=value overrides]}}, the cases ``warpbem sweep`` runs
 
     def initial_bodies(self) -> list[Body]:
-        return [Body(b[1], position=b[2], orientation=b[3], fixed=b[4]) for b in self.bodies]
+        return [Body(b.mesh, position=b.position, orientation=b.orientation, fixed=b.fixed) for b in self.bodies]
+
+    def initial_state(self) -> State:
+        return self.model.initial_state([b.position for b in self.bodies], [b.orientation for b in self.bodies])
+
+    def next_stop(self, time: float) -> float:
+        """The time (s) the next step must not pass: the next frame time or the end."""
+        if self.frame_interval is None:
+            return self.end
+        k = math.floor(time / self.frame_interval * (1 + 1e-12)) + 1
+        return min(k * self.frame_interval, self.end)
+
+    def frame_due(self, state: State, stop: float) -> bool:
+        """Whether ``state``, reached by a step towards ``stop``, is written as a frame."""
+        if state.time == self.end:
+            return True
+        if self.frame_interval is None:
+            return state.steps % self.frame_every == 0
+        return state.time == stop
 
 
 def _mesh(where, spec, folder: Path):
@@ -131,9 +158,10 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
     physics = _table("physics", table.get("physics", {}), {"gravity", "fluid_density", "repulsion"})
     repulsion = _table("repulsion", table.get("repulsion", {}),
                        {"coefficient", "inverse_length", "cell_roughness", "wall_roughness"})
-    time = _table("time", table["time"], {"end", "dt_max", "dt_min", "contact_gap", "scheme", "frame_every"}, ("end",))
+    time = _table("time", table["time"], {"end", "dt_max", "dt_min", "contact_gap", "scheme", "frame_every",
+                                          "frame_interval"}, ("end",))
     solver = _table("solver", table.get("solver", {}), {"quadrature_order", "contact_refinement", "tolerance",
-                                                        "refine_fixed_at_wall"})
+                                                        "refine_fixed_at_wall", "dtype"})
     if not isinstance(table["bodies"], list) or not table["bodies"]:
         raise SceneError("bodies: expected at least one [[bodies]] entry")
     bodies = []
@@ -141,40 +169,64 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
         where = f"bodies.{i}"
         _table(where, spec, {"name", "mesh", "position", "orientation", "fixed", "density", "force", "torque"},
                ("mesh", "position"))
-        bodies.append((str(spec.get("name", f"body{i}")), _mesh(f"{where}.mesh", spec["mesh"], folder),
-                       _vector(f"{where}.position", spec["position"], 3),
-                       _vector(f"{where}.orientation", spec.get("orientation", [1.0, 0, 0, 0]), 4),
-                       _bool(f"{where}.fixed", spec.get("fixed", False)),
-                       _number(f"{where}.density", spec.get("density", 1000.0), 100.0, 1e5),
-                       _vector(f"{where}.force", spec.get("force", [0.0, 0.0, 0.0]), 3),
-                       _vector(f"{where}.torque", spec.get("torque", [0.0, 0.0, 0.0]), 3)))
+        bodies.append(BodySpec(str(spec.get("name", f"body{i}")), _mesh(f"{where}.mesh", spec["mesh"], folder),
+                               _vector(f"{where}.position", spec["position"], 3),
+                               _vector(f"{where}.orientation", spec.get("orientation", [1.0, 0, 0, 0]), 4),
+                               _bool(f"{where}.fixed", spec.get("fixed", False)),
+                               _number(f"{where}.density", spec.get("density", 1000.0), 100.0, 1e5),
+                               _vector(f"{where}.force", spec.get("force", [0.0, 0.0, 0.0]), 3),
+                               _vector(f"{where}.torque", spec.get("torque", [0.0, 0.0, 0.0]), 3)))
+        if bodies[-1].fixed and (any(bodies[-1].force) or any(bodies[-1].torque)):
+            raise SceneError(f"{where}.force: body {i} is fixed; its load is what holds it (an output), so give"
+                             " force and torque for free bodies only")
+    end = _number("time.end", time["end"], 0, 1e6, low_open=True)
     dt_max = _number("time.dt_max", time.get("dt_max", 1e-4), 0, 10, low_open=True)
     dt_min = _number("time.dt_min", time.get("dt_min", min(1e-5, dt_max)), 0, dt_max, low_open=True)
+    if "frame_every" in time and "frame_interval" in time:
+        raise SceneError("time.frame_interval: give frames by steps (frame_every) or by time (frame_interval), not both")
+    frame_interval = (_number("time.frame_interval", time["frame_interval"], 0, end, low_open=True)
+                      if "frame_interval" in time else None)
+    frame_every = (None if frame_interval is not None
+                   else _number("time.frame_every", time.get("frame_every", 1), 1, 1e9, integer=True))
     repulsion_model = Repulsion(  # validated even when switched off, so typos surface early
         _number("repulsion.coefficient", repulsion.get("coefficient", 1e-12), 0, 1, low_open=True),
         _number("repulsion.inverse_length", repulsion.get("inverse_length", 2e9), 0, 1e12, low_open=True),
         _number("repulsion.cell_roughness", repulsion.get("cell_roughness", 175e-9), 0, 1e-5),
         _number("repulsion.wall_roughness", repulsion.get("wall_roughness", 50e-9), 0, 1e-5))
-    scheme = time.get("scheme", "heun")
-    if scheme not in ("euler", "heun"):
-        raise SceneError(f"time.scheme: {scheme!r} is not one of 'euler', 'heun'")
-    return Scene(
-        raw=copy.deepcopy(table), bodies=tuple(bodies),
-        shear_rate=_number("flow.shear_rate", flow["shear_rate"], -1e6, 1e6),
-        viscosity=_number("flow.viscosity", flow.get("viscosity", 1.2e-3), 0, 1e3, low_open=True),
-        wall=_bool("flow.wall", flow.get("wall", True)),
-        gravity=_bool("physics.gravity", physics.get("gravity", False)),
-        fluid_density=_number("physics.fluid_density", physics.get("fluid_density", 1000.0), 100.0, 1e5),
-        repulsion=repulsion_model if _bool("physics.repulsion", physics.get("repulsion", False)) else None,
-        end=_number("time.end", time["end"], 0, 1e6, low_open=True), dt_max=dt_max, dt_min=dt_min,
-        contact_gap=_number("time.contact_gap", time.get("contact_gap", 5e-7), 0, 1e-2, low_open=True),
-        scheme=scheme, frame_every=_number("time.frame_every", time.get("frame_every", 1), 1, 1e9, integer=True),
-        quadrature_order=_number("solver.quadrature_order", solver.get("quadrature_order", 2), 1, 10, integer=True),
-        contact_refinement=_number("solver.contact_refinement", solver.get("contact_refinement", 3.0), 0, 20),
-        tolerance=_number("solver.tolerance", solver.get("tolerance", 1e-8), 0, 0.1, low_open=True),
-        refine_fixed_at_wall=_bool("solver.refine_fixed_at_wall", solver.get("refine_fixed_at_wall", True)),
-        sweep=sweep,
-    )
+    scheme = _choice("time.scheme", time.get("scheme", "heun"), ("euler", "heun"))
+    meshes_, fixed = [b.mesh for b in bodies], [b.fixed for b in bodies]
+    fluid_density = _number("physics.fluid_density", physics.get("fluid_density", 1000.0), 100.0, 1e5)
+    # model no more than the scene needs: only the interactions switched on are built
+    interactions = []
+    if _bool("physics.gravity", physics.get("gravity", False)):
+        interactions.append(Gravity(meshes_, fixed, [b.density for b in bodies], fluid_density, STANDARD_GRAVITY))
+    if any(any(b.force) or any(b.torque) for b in bodies):
+        interactions.append(ExternalLoads(fixed, [b.force for b in bodies], [b.torque for b in bodies]))
+    if _bool("physics.repulsion", physics.get("repulsion", False)):
+        interactions.append(repulsion_model)
+    tolerance = solver.get("tolerance")
+    model = Model(
+        meshes=meshes_, fixed=fixed, names=[b.name for b in bodies], interactions=interactions,
+        flow=Flow(_number("flow.shear_rate", flow["shear_rate"], -1e6, 1e6),
+                  _number("flow.viscosity", flow.get("viscosity", 1.2e-3), 0, 1e3, low_open=True),
+                  _bool("flow.wall", flow.get("wall", True))),
+        solver=SolverOptions(
+            quadrature_order=_number("solver.quadrature_order", solver.get("quadrature_order", 2), 1, 10, integer=True),
+            contact_refinement=_number("solver.contact_refinement", solver.get("contact_refinement", 3.0), 0, 20),
+            refine_fixed_at_wall=_bool("solver.refine_fixed_at_wall", solver.get("refine_fixed_at_wall", True)),
+            tolerance=None if tolerance is None else _number("solver.tolerance", tolerance, 0, 0.1, low_open=True),
+            dtype=_choice("solver.dtype", solver.get("dtype", "float64"), ("float64", "float32"))),
+        policy=StepPolicy(dt_max, dt_min,
+                          _number("time.contact_gap", time.get("contact_gap", 5e-7), 0, 1e-2, low_open=True)),
+        scheme=scheme)
+    return Scene(raw=copy.deepcopy(table), bodies=tuple(bodies), model=model, end=end, frame_every=frame_every,
+                 frame_interval=frame_interval, sweep=sweep)
+
+
+def _choice(where, value, allowed):
+    if value not in allowed:
+        raise SceneError(f"{where}: {value!r} is not one of {', '.join(repr(a) for a in allowed)}")
+    return value
 
 
 def _sweep_axes(table) -> dict:
@@ -228,35 +280,24 @@ def load(path, overrides=()) -> Scene:
     except tomllib.TOMLDecodeError as err:
         raise SceneError(f"{path}: not valid TOML ({err})") from err
     scene = parse(apply_overrides(table, overrides), path.parent)
-    from .placement import PlacementError, check_placement
-
     try:
-        check_placement(scene.initial_bodies(), scene.wall)
+        check_placement(scene.initial_bodies(), scene.model.flow.wall)
     except PlacementError as err:
         raise SceneError(f"{path}: initial placement: {err}") from err
-    if scene.repulsion is not None:
-        _check_roughness(scene)
+    repulsion = scene.model.interaction(Repulsion.name)
+    if repulsion is not None:
+        _check_roughness(scene, repulsion)
     return scene
 
 
-def _check_roughness(scene: Scene):
+def _check_roughness(scene: Scene, rep: Repulsion):
     """With repulsion on, the roughness layers of a free body must not start in contact
     (thesis eq. 3.1 diverges there)."""
-    from .contact import WALL, GapFinder, candidate_pairs, outer_radius
-
-    bodies, finder, rep = scene.initial_bodies(), GapFinder(), scene.repulsion
+    contacts = Contacts(scene.initial_bodies(), scene.model.outer_radii, scene.model.flow.wall, GapFinder())
     layers = rep.cell_roughness + max(rep.cell_roughness, rep.wall_roughness)  # the thickest pair
-    pairs = candidate_pairs([b.position for b in bodies], [outer_radius(b.mesh) for b in bodies],
-                            [b.fixed for b in bodies], scene.wall, 2.0 * layers)
-    for i, j in pairs:
-        gap = finder.between(bodies, i, j).distance
-        if rep.separation(gap, j == WALL) <= 0:
-            other = "the wall" if j == WALL else f"bodies.{j}"
-            raise SceneError(f"bodies.{i}.position: its roughness layer touches that of {other} (gap"
-                             f" {gap:.4g} m; with repulsion on the gap must exceed"
-                             f" {rep.cell_roughness + (rep.wall_roughness if j == WALL else rep.cell_roughness):.4g} m)")
-
-
-def body_arrays(scene: Scene):
-    """Initial positions (n, 3), orientations (n, 4), densities (n,), forces and torques (n, 3)."""
-    return tuple(np.array([b[k] for b in scene.bodies]) for k in (2, 3, 5, 6, 7))
+    for gap in contacts.within(2.0 * layers):
+        if rep.separation(gap.distance, gap.other == WALL) <= 0:
+            other = "the wall" if gap.other == WALL else f"bodies.{gap.other}"
+            needed = rep.cell_roughness + (rep.wall_roughness if gap.other == WALL else rep.cell_roughness)
+            raise SceneError(f"bodies.{gap.body}.position: its roughness layer touches that of {other} (gap"
+                             f" {gap.distance:.4g} m; with repulsion on the gap must exceed {needed:.4g} m)")

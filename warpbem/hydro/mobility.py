@@ -50,12 +50,12 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse.linalg as spla
 
-from .body import Body
+from ..surfaces.body import Body
+from ..surfaces.placement import check_placement
+from ..surfaces.refinement import WALL
 from .geometry import SurfaceGeometry
 from .linalg import gmres
 from .operators import DoubleLayerOperator, QuadratureOptions
-from .placement import check_placement
-from .refinement import WALL
 
 
 class ContactResolutionWarning(UserWarning):
@@ -65,6 +65,10 @@ class ContactResolutionWarning(UserWarning):
 FACTOR_LIMIT = 1800  # unknowns (600 elements): largest moving body block factored for GMRES
 FORCE_UNIT = 6.0 * np.pi  # scaled force of a unit-speed unit sphere; scales the load unknowns
 TORQUE_UNIT = 8.0 * np.pi
+# GMRES relative residual by precision when none is given: float32 products carry ~1e-7 of
+# round-off, so 1e-8 is out of their reach (the stability map: 1e-6 converges down to gaps of
+# 0.1 radius)
+DEFAULT_TOLERANCE = {"float64": 1e-8, "float32": 1e-6}
 
 
 @dataclass(frozen=True)
@@ -294,7 +298,7 @@ class MobilitySolver:
     """
 
     def __init__(self, shear_rate: float = 0.0, viscosity: float = 1e-3, wall: bool = True, device="cpu", *,
-                 quadrature_order: int = 2, adaptive_quadrature: bool = True, tolerance: float = 1e-8,
+                 quadrature_order: int = 2, adaptive_quadrature: bool = True, tolerance: float | None = None,
                  max_iterations: int = 600, dtype: str = "float64", operator: str = "auto",
                  contact_refinement: float = 3.0, refine_fixed_at_wall: bool = True, reuse: bool = True,
                  precondition: bool = True):
@@ -303,7 +307,9 @@ class MobilitySolver:
         self.wall = bool(wall)
         self.device = device
         self.quadrature = QuadratureOptions(order=quadrature_order, adaptive=bool(adaptive_quadrature))
-        self.tolerance = tolerance
+        if dtype not in DEFAULT_TOLERANCE:
+            raise ValueError(f"dtype must be one of {sorted(DEFAULT_TOLERANCE)}, got {dtype!r}")
+        self.tolerance = DEFAULT_TOLERANCE[dtype] if tolerance is None else tolerance
         self.max_iterations = max_iterations
         self.dtype = dtype
         self.operator = operator
@@ -345,7 +351,9 @@ class MobilitySolver:
         if not background:
             prescribed[:] = 0.0
         previous = self._last[0] if self.reuse and self._last else None
-        key = [(id(b.mesh), b.position.tobytes(), b.orientation.tobytes(), b.fixed) for b in bodies]
+        # the meshes themselves, not their ids: the key keeps them alive, so a new mesh can never
+        # come back at a garbage-collected one's address and be taken for it
+        key = [(b.mesh, b.position.tobytes(), b.orientation.tobytes(), b.fixed) for b in bodies]
         if previous is not None and key == self._last[3]:  # the very same bodies: keep the system
             system = previous
             geometry, double_layer = system.geometry, system.operator
@@ -436,7 +444,7 @@ def solve_mobility(
     *,
     quadrature_order: int = 2,
     adaptive_quadrature: bool = True,
-    tolerance: float = 1e-8,
+    tolerance: float | None = None,
     max_iterations: int = 600,
     dtype: str = "float64",
     operator: str = "auto",
@@ -449,8 +457,8 @@ def solve_mobility(
     wall: no-slip plane z = 0 (else unbounded); forces, torques: (n_bodies, 3) external loads
     on free bodies (N, N m), zero rows for fixed ones. quadrature_order: Gauss points per
     direction; adaptive_quadrature: subdivide nearly singular elements; tolerance: GMRES
-    relative residual; dtype: "float64" or "float32" kernels; operator: "auto", "dense" or
-    "matrix_free"; initial_guess: a previous solution's ``solution_vector``;
+    relative residual (default by dtype: 1e-8 for float64, 1e-6 for float32); dtype:
+    "float64" or "float32" kernels; operator: "auto", "dense" or "matrix_free"; initial_guess: a previous solution's ``solution_vector``;
     contact_refinement: split elements nearer than 1/ratio of their radius to the wall or
     another body (0: never). For repeated solves use ``MobilitySolver``.
     """

@@ -11,8 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import quad9, runtime
-from .refinement import refine_near_contact
+from .. import runtime
+from ..surfaces import quad9
+from ..surfaces.refinement import refine_near_contact
 
 
 @dataclass(frozen=True, eq=False)

@@ -20,43 +20,30 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from .body import Body
+from ..surfaces.body import Body
+from .io import RunFileError, complete_rows, open_result
 from .scene import SceneError, parse
 
 
-class RunFileError(ValueError):
-    """The file is not a warpbem run (or its meshes cannot be rebuilt)."""
-
-
-def _read(run_path: Path):
-    """(meshes, time (F,), positions (F, n, 3), orientations (F, n, 4)) of the complete frames."""
-    try:
-        # no lock: the writer of a run in progress holds one and would make this open fail
-        f = h5py.File(run_path, "r", locking=False)
-    except OSError as err:
-        raise RunFileError(f"{run_path}: not a readable HDF5 file ({err})") from err
-    with f:
-        missing = [k for k in ("time", "position", "orientation") if k not in f] + \
-                  [k for k in ("scene", "scene_folder") if k not in f.attrs]
-        if missing:
-            raise RunFileError(f"{run_path}: not a warpbem run file (no {missing[0]!r}); warpbem xdmf reads"
-                               " the files of warpbem run and warpbem sweep")
+def read_frames(run_path: Path):
+    """(meshes, time (F,), positions (F, n, 3), orientations (F, n, 4)) of the frames complete in
+    every column (the writer fills the columns one by one), read without a lock."""
+    with open_result(run_path, needs=("time", "position", "orientation", "scene", "scene_folder")) as f:
         try:
             scene = parse(json.loads(f.attrs["scene"]), Path(f.attrs["scene_folder"]))
         except SceneError as err:
             raise RunFileError(f"{run_path}: cannot rebuild the meshes of its scene: {err}") from err
-        # a frame is complete once every column has it: the writer fills the columns one by one
-        frames = min(ds.shape[0] for ds in f.values() if isinstance(ds, h5py.Dataset))
+        frames = complete_rows(f)
         if frames == 0:
             raise RunFileError(f"{run_path}: the run has no frame yet")
         time, positions, orientations = (f[k][:frames] for k in ("time", "position", "orientation"))
-    meshes = [b[1] for b in scene.bodies]
+    meshes = [b.mesh for b in scene.bodies]
     if positions.shape[1] != len(meshes):
         raise RunFileError(f"{run_path}: {positions.shape[1]} bodies in the frames but {len(meshes)} in its scene")
     return meshes, time, positions, orientations
 
 
-def _world_nodes(meshes, positions, orientations) -> np.ndarray:
+def world_nodes(meshes, positions, orientations) -> np.ndarray:
     """All bodies' nodes in the world frame, concatenated."""
     return np.concatenate([Body(m, position=p, orientation=q).world_nodes()
                            for m, p, q in zip(meshes, positions, orientations)])
@@ -71,7 +58,7 @@ def _data_item(parent, dims, number_type, precision, reference):
 def write(run_path) -> Path:
     """Write ``RUN.xdmf`` and ``RUN.xdmf.h5`` beside the run file ``RUN.h5``; returns the .xdmf."""
     run_path = Path(run_path)
-    meshes, time, positions, orientations = _read(run_path)
+    meshes, time, positions, orientations = read_frames(run_path)
     offsets = np.cumsum([0] + [len(m.nodes) for m in meshes])
     connectivity = np.concatenate([m.elements + o for m, o in zip(meshes, offsets)])
     body = np.concatenate([np.full(m.n_elements, i, dtype=np.int32) for i, m in enumerate(meshes)])
@@ -87,7 +74,7 @@ def write(run_path) -> Path:
         nodes = group.create_group("nodes")
         nodes.attrs["unit"] = "m"
         for name, p, q in zip(names, positions, orientations):
-            nodes.create_dataset(name, data=_world_nodes(meshes, p, q))
+            nodes.create_dataset(name, data=world_nodes(meshes, p, q))
 
     root = ET.Element("Xdmf", Version="3.0")
     domain = ET.SubElement(root, "Domain")

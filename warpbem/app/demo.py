@@ -15,10 +15,11 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from . import mesh, units
-from .body import Body
+from .. import units
+from ..hydro.mobility import MobilitySolver
+from ..surfaces import mesh
+from ..surfaces.body import Body
 from .io import TableWriter
-from .mobility import MobilitySolver
 
 
 @dataclass(frozen=True)

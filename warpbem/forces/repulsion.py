@@ -24,7 +24,9 @@ Stiffness. The force changes e-fold over 1/tau = 0.5 nm; with the squeeze mobili
 cell 0.25 um from a surface an explicit step would have to stay below ~1e-5 s (the seed's
 limit). ``implicit_forces`` instead takes the contact forces at the end of the step (backward
 Euler for the separations, with the exact contact mobilities from the BEM solver), which is
-stable for any step and keeps eps > 0.
+stable for any step and keeps eps > 0. As an interaction (``forces/interaction.py``) its
+coordinates are the separations of the contacts within reach, each with the unit loads of a
+repulsive force along the contact normal, applied at the closest points.
 """
 
 from __future__ import annotations
@@ -33,12 +35,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..surfaces.gaps import WALL
+from ..surfaces.placement import PlacementError
+from .interaction import ImplicitCoordinates, Interaction
+
 NEGLIGIBLE_FORCE = 1e-18  # N: contacts whose force would be smaller are left out
 
 
 @dataclass(frozen=True)
-class Repulsion:
-    """Thesis eq. 3.1 in SI: ``coefficient`` F0 (J), ``inverse_length`` tau (1/m), roughness (m)."""
+class Repulsion(Interaction):
+    """Thesis eq. 3.1 in SI: ``coefficient`` F0 (J), ``inverse_length`` tau (1/m), roughness (m).
+    Acts between each free body and every other body and the wall."""
+
+    name = "repulsion"
+    implicit = True
 
     coefficient: float = 1e-12
     inverse_length: float = 2e9
@@ -128,3 +138,38 @@ class Repulsion:
             raise RuntimeError(f"implicit repulsion did not converge: residual {np.abs(r).max():.3g} m")
         force = np.exp(w)
         return force, np.log1p(f0_tau / force) / self.inverse_length
+
+    def implicit_coordinates(self, bodies, contacts, velocity, angular_velocity, dt):
+        """The contacts whose separation can come within ``reach`` over a step of at most dt:
+        searched out to reach + both roughness layers + twice the distance the fastest surface
+        point travels in dt; a contact stays if its separation, closing at its current rate, gets
+        within reach. Roughness layers that touch already are a PlacementError (the step retries
+        shorter)."""
+        speed = np.abs(velocity).max() + np.abs(angular_velocity).max() * contacts.outer_radii.max()
+        search = self.reach + 2.0 * self.cell_roughness + 2.0 * speed * dt
+        n = len(bodies)
+        kept = []
+        for gap in contacts.within(search):
+            eps = self.separation(gap.distance, gap.other == WALL)
+            if eps <= 0.0:
+                other = "the wall" if gap.other == WALL else f"body {gap.other}"
+                raise PlacementError(f"the roughness layers of body {gap.body} and {other} touch"
+                                     f" (gap {gap.distance:.4g} m)")
+            force, torque = np.zeros((n, 3)), np.zeros((n, 3))
+            for body, point, sign in ((gap.body, gap.point, 1.0), (gap.other, gap.other_point, -1.0)):
+                if body != WALL:
+                    force[body] = sign * gap.normal
+                    torque[body] = sign * np.cross(point - bodies[body].position, gap.normal)
+            rate = float(np.sum(force * velocity) + np.sum(torque * angular_velocity))
+            if eps + dt * min(rate, 0.0) < self.reach:
+                kept.append((eps, force, torque))
+        if not kept:
+            return None
+        eps, force, torque = map(np.array, zip(*kept))
+        return ImplicitCoordinates(eps, force, torque)
+
+    def implicit_magnitudes(self, coordinates, rates, response, dt):
+        return self.implicit_forces(coordinates.values, rates, response, dt)[0]
+
+    def magnitudes_at(self, coordinates):
+        return self.force(coordinates.values)

@@ -14,6 +14,14 @@ grid of all the scene's axes runs.
 tasks of a Dask cluster (the ``dask`` extra) instead: the workers must see the scene, its mesh
 files and the output folder at the same paths (a shared file system). The files and the summary
 are the same as a local sweep's; the progress lines come as points finish.
+
+Sweeps resume by default: run again into the same folder, a point whose file holds its run to
+the end is kept, one that stopped early is resumed from its last complete frame, and a missing
+or unreadable one is run; the summary is written from all. A point file holding a different
+scene (the scene or the grid changed) stops the sweep before any work, naming it;
+``overwrite=True`` (``--overwrite``) runs every point afresh. When a point fails, the sweep
+stops with an error naming the point; local workers finish the point they are on (kept for the
+next resume) and start no other.
 """
 
 from __future__ import annotations
@@ -25,10 +33,11 @@ import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-import h5py
 import numpy as np
 
+from ..dynamics.frame import frame_columns
 from . import run as runner
+from .io import RunFileError, complete_rows, open_result
 from .scene import SceneError, load
 
 
@@ -75,20 +84,48 @@ def grid(varies, scene_axes=None) -> list[tuple[dict, list[str]]]:
             for point in itertools.product(*axes)]
 
 
+def point_status(output: Path, scene) -> str:
+    """"complete", "partial" (resume it) or "missing" (run it: no file, or not a readable run);
+    SceneError if the file holds another scene."""
+    try:
+        f = open_result(output, needs=("scene", "time"))
+    except RunFileError:
+        return "missing"
+    with f:
+        if f.attrs["scene"] != json.dumps(scene.raw, sort_keys=True):
+            raise SceneError(f"{output} holds a run of a different scene than this point's (the scene or the"
+                             " grid changed): use another --output-dir, or --overwrite to run every point afresh")
+        rows = complete_rows(f, frame_columns(scene.model))
+        if rows == 0:
+            return "missing"
+        return "complete" if f["time"][rows - 1] >= scene.end else "partial"
+
+
 def _run_point(args):
-    scene_path, output, labels, overrides, device = args
-    runner.run(scene_path, output, overrides, device, progress=lambda line: None, overwrite=True)
-    with h5py.File(output, "r") as f:
-        start, end = f["position"][0], f["position"][-1]
+    """Run (or resume, or keep) one point; returns (summary row, what was done)."""
+    scene_path, output, labels, overrides, device, overwrite = args
+    status = "missing" if overwrite else point_status(Path(output), load(scene_path, overrides))
+    if status == "partial":
+        runner.run(None, output, (), device, resume=True, progress=lambda line: None)
+    elif status == "missing":
+        runner.run(scene_path, output, overrides, device, progress=lambda line: None, overwrite=True)
+    with open_result(output) as f:
+        rows = complete_rows(f)
+        start, end = f["position"][0], f["position"][rows - 1]
         names = json.loads(f.attrs["body_names"])
-        closest = float(np.min(f["closest_gap"][:]))
-    return {"file": str(output), **labels, "closest_gap_m": closest,
-            **{f"{n}_dz_m": float(end[i, 2] - start[i, 2]) for i, n in enumerate(names)},
-            **{f"{n}_dx_m": float(end[i, 0] - start[i, 0]) for i, n in enumerate(names)}}
+        closest = float(np.min(f["closest_gap"][:rows]))
+    row = {"file": str(output), **labels, "closest_gap_m": closest,
+           **{f"{n}_dz_m": float(end[i, 2] - start[i, 2]) for i, n in enumerate(names)},
+           **{f"{n}_dx_m": float(end[i, 0] - start[i, 0]) for i, n in enumerate(names)}}
+    return row, {"complete": "kept", "partial": "resumed", "missing": "ran"}[status]
 
 
-def _line(done, total, row) -> str:
-    return f"[{done}/{total}] {row['file']}: " + ", ".join(
+def _failed(i, job, err) -> SweepError:
+    return SweepError(f"point{i:03d} ({', '.join(job[3])}) failed: {type(err).__name__}: {err}")
+
+
+def _line(done, total, row, what) -> str:
+    return f"[{done}/{total}] {what} {row['file']}: " + ", ".join(
         f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}" for k, v in row.items() if k != "file")
 
 
@@ -114,12 +151,12 @@ def _on_cluster(jobs, scheduler, progress) -> list[dict]:
         for done, future in enumerate(as_completed(futures), 1):
             i = futures[future]
             try:
-                row = future.result()
+                row, what = future.result()
             except Exception as err:
                 raise SweepError(f"point{i:03d} ({', '.join(jobs[i][3])}) failed on the cluster:"
                                  f" {type(err).__name__}: {err}") from err
             rows[i] = {**row, "file": str(jobs[i][1])}  # the file named as a local sweep names it
-            progress(_line(done, len(jobs), rows[i]))
+            progress(_line(done, len(jobs), rows[i], what))
     finally:
         client.cancel(list(futures))  # nothing left running on the cluster after an error or interrupt
         if own:
@@ -127,38 +164,60 @@ def _on_cluster(jobs, scheduler, progress) -> list[dict]:
     return rows
 
 
-def sweep(scene_path, varies, output_dir, device="cpu", workers=1, progress=print, scheduler=None) -> Path:
-    """Run every point of the grid; returns the summary CSV. ``workers`` local processes, or with
-    ``scheduler`` (a Dask scheduler address or ``distributed.Client``) the cluster's workers."""
+def sweep(scene_path, varies, output_dir, device="cpu", workers=1, progress=print, scheduler=None,
+          overwrite=False) -> Path:
+    """Run every point of the grid (resuming a sweep already in ``output_dir``, see the module
+    docstring); returns the summary CSV. ``workers`` local processes, or with ``scheduler`` (a
+    Dask scheduler address or ``distributed.Client``) the cluster's workers."""
     if scheduler is not None and workers > 1:
         raise ValueError("give workers (local processes) or scheduler (a Dask cluster), not both")
     points = grid(varies, load(scene_path).sweep)
     if not points or not points[0][1]:
         raise SceneError("nothing to sweep: give --vary KEY=V1,V2 or add [sweep.AXIS] cases to the scene")
-    for _, overrides in points:  # validate every point before any work
-        load(scene_path, overrides)
     output_dir = Path(output_dir)
-    output_dir.mkdir(parents=True, exist_ok=True)
-    jobs = [(scene_path, output_dir / f"point{i:03d}.h5", labels, overrides, device)
+    jobs = [(scene_path, output_dir / f"point{i:03d}.h5", labels, overrides, device, overwrite)
             for i, (labels, overrides) in enumerate(points)]
+    for job in jobs:  # validate every point, and what its file holds, before any work
+        scene = load(scene_path, job[3])
+        if not overwrite:
+            point_status(job[1], scene)
+    output_dir.mkdir(parents=True, exist_ok=True)
     if scheduler is not None:
         rows = _on_cluster(jobs, scheduler, progress)
-    else:
+    elif workers <= 1:
         rows = []
-        if workers <= 1:
-            results = map(_run_point, jobs)
-        else:
-            # fresh interpreters (spawn): Warp's runtime is not safe to fork once initialised
-            pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
-            results = pool.map(_run_point, jobs)
-        for i, row in enumerate(results):
+        for i, job in enumerate(jobs):
+            try:
+                row, what = _run_point(job)
+            except Exception as err:
+                raise _failed(i, job, err) from err
             rows.append(row)
-            progress(_line(i + 1, len(jobs), row))
-        if workers > 1:
-            pool.shutdown()
+            progress(_line(i + 1, len(jobs), row, what))
+    else:
+        rows = _in_processes(jobs, workers, progress)
     summary = output_dir / "summary.csv"
     with summary.open("w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
     return summary
+
+
+def _in_processes(jobs, workers, progress) -> list[dict]:
+    """The points' rows in grid order from local worker processes (fresh interpreters, spawn:
+    Warp's runtime is not safe to fork once initialised). On a failure the pending points are
+    cancelled and the pool shut down once the running ones finish (their files are complete)."""
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+    try:
+        futures = [pool.submit(_run_point, job) for job in jobs]
+        rows = []
+        for i, future in enumerate(futures):
+            try:
+                row, what = future.result()
+            except Exception as err:
+                raise _failed(i, jobs[i], err) from err
+            rows.append(row)
+            progress(_line(i + 1, len(jobs), row, what))
+        return rows
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)

@@ -1,5 +1,6 @@
 """Exact surface gaps: the closest points between two bodies, or between a body and the wall,
-found by Newton's method on candidate element pairs (``kernels/contact.py``).
+found by Newton's method on candidate element pairs (``kernels/contact.py``), and ``Contacts``,
+the gaps of one configuration, each pair searched at most once however many users ask.
 
 Candidates are pruned with bounding spheres: each element lies within ``BOUND_FACTOR`` times the
 largest distance of its nodes from its centre node (the biquadratic surface bulges a little
@@ -13,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import runtime
+from .. import runtime
 
 WALL = -1
 BOUND_FACTOR = 1.15
@@ -65,7 +66,7 @@ class GapFinder:
     def __init__(self, device="cpu"):
         self.device = runtime.resolve_device(device)
         wp = runtime.init()
-        from .kernels.contact import build_contact_kernels
+        from ..kernels.contact import build_contact_kernels
 
         self.wp = wp
         self.kernels = build_contact_kernels(wp.float64)
@@ -106,3 +107,57 @@ class GapFinder:
         best = int(np.argmin(distances))
         d = float(distances[best])
         return Gap(i, j, d, pa[best], pb[best], (pa[best] - pb[best]) / d)
+
+
+class Contacts:
+    """The exact gaps of one configuration of bodies (DESIGN.md §3, step 2), computed on demand
+    and kept: the step-size rule, every interaction and the frame's ``closest_gap`` share them,
+    so no pair is searched twice for the same state.
+
+    ``bodies``: the ``Body`` list; ``outer_radii``: their bounding radii (``outer_radius``);
+    ``wall``: the plane z = 0 is there; ``finder``: a ``GapFinder``. Pairs are as in
+    ``candidate_pairs``: a free body and another body or the wall.
+    """
+
+    def __init__(self, bodies, outer_radii, wall: bool, finder: GapFinder):
+        self.bodies = list(bodies)
+        self.positions = np.array([b.position for b in self.bodies])
+        self.outer_radii = np.asarray(outer_radii, dtype=float)
+        self.fixed = np.array([b.fixed for b in self.bodies])
+        self.wall = bool(wall)
+        self.finder = finder
+        self._gaps: dict[tuple[int, int], Gap] = {}
+
+    def gap(self, i: int, j: int) -> Gap:
+        """The exact gap of free body i to body j (or WALL), searched once."""
+        if (i, j) not in self._gaps:
+            self._gaps[(i, j)] = self.finder.between(self.bodies, i, j)
+        return self._gaps[(i, j)]
+
+    def pairs(self, within: float) -> list[tuple[int, int]]:
+        return candidate_pairs(self.positions, self.outer_radii, self.fixed, self.wall, within)
+
+    def within(self, distance: float) -> list[Gap]:
+        """Exact gaps of every pair whose bounding spheres come closer than ``distance`` (m): all
+        pairs whose gap can be below it (some returned gaps may exceed it)."""
+        return [self.gap(i, j) for i, j in self.pairs(distance)]
+
+    def smallest(self, distance: float) -> float:
+        """The smallest exact gap (m, >= 0) below ``distance``, else ``distance``."""
+        gaps = [g.distance for g in self.within(distance)]
+        return float(np.clip(min(gaps, default=distance), 0.0, distance))
+
+    def closest(self) -> float:
+        """The exact smallest gap (m) of a free body to another body or the wall (inf if there is
+        none). Pairs are searched in order of their bounding-sphere gap, a lower bound of the
+        exact one, and the search stops once that bound passes the best gap found."""
+        pairs = self.pairs(np.inf)
+        bounds = [self.positions[i][2] - self.outer_radii[i] if j == WALL else
+                  np.linalg.norm(self.positions[i] - self.positions[j]) - self.outer_radii[i] - self.outer_radii[j]
+                  for i, j in pairs]
+        best = np.inf
+        for k in np.argsort(bounds, kind="stable"):
+            if bounds[k] >= best:
+                break
+            best = min(best, self.gap(*pairs[k]).distance)
+        return float(best)

@@ -7,21 +7,13 @@ constant, so the rotation is exact for it: q <- exp(Omega dt / 2) q, renormalise
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
+from .state import State
+
 SCHEMES = ("euler", "heun")
-
-
-@dataclass(frozen=True)
-class State:
-    """Time-varying part of a scene: time (s), positions (n, 3) m, orientations (n, 4)."""
-
-    time: float
-    positions: np.ndarray
-    orientations: np.ndarray
-
 
 def quaternion_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Hamilton product of quaternions (w, x, y, z), row by row."""

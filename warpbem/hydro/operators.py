@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import runtime
+from .. import runtime
 from .geometry import SurfaceGeometry
 
 
@@ -58,7 +58,7 @@ class DoubleLayerOperator:
                  dense_memory_limit: float | None = None, reuse: "DoubleLayerOperator | None" = None):
         if mode not in OPERATOR_MODES:
             raise ValueError(f"operator mode must be one of {OPERATOR_MODES}, got {mode!r}")
-        from .kernels.assembly import build_kernels  # the top-level kernels/ folder, installed as warpbem.kernels
+        from ..kernels.assembly import build_kernels  # the top-level kernels/ folder, installed as warpbem.kernels
 
         self._wp = runtime.init()
         self.device = runtime.resolve_device(device)

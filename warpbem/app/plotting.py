@@ -1,0 +1,146 @@
+"""PNG charts of warpbem HDF5 results (matplotlib, the optional ``plot`` extra)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..surfaces.body import Body
+from .io import RunFileError, open_result
+
+
+def _pyplot():
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError as err:
+        raise RuntimeError("plotting needs matplotlib: pip install 'warpbem[plot]'") from err
+    return plt
+
+
+def plot_demo(h5_path, png_path=None) -> Path:
+    """Velocities of the free cell and loads on the adherent cell along the pass."""
+    plt = _pyplot()
+    h5_path = Path(h5_path)
+    png_path = Path(png_path) if png_path else h5_path.with_suffix(".png")
+    with open_result(h5_path, needs=("x", "free_velocity")) as f:
+        x = f["x"][:] * 1e6
+        u = f["free_velocity"][:] * 1e6
+        w = f["free_angular_velocity"][:]
+        force = f["adherent_force"][:] * 1e12
+        title = f.attrs.get("title", "")
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
+    axes[0].plot(x, u[:, 0], "o-", label="U (streamwise)")
+    axes[0].set_ylabel("velocity [um/s]")
+    ax = axes[1]
+    ax.plot(x, u[:, 1], "s-", label="V (lateral)")
+    ax.plot(x, u[:, 2], "^-", label="W (vertical, + away from wall)")
+    ax.axhline(0.0, color="0.6", lw=0.8)
+    ax.set_ylabel("velocity [um/s]")
+    axes[2].plot(x, force[:, 0], "o-", label="F_x")
+    axes[2].plot(x, force[:, 1], "s-", label="F_y")
+    axes[2].plot(x, force[:, 2], "^-", label="F_z")
+    axes[2].set_ylabel("force holding the adherent cell [pN]")
+    twin = axes[0].twinx()
+    twin.plot(x, w[:, 1], "k--", lw=1, label="Omega_y")
+    twin.set_ylabel("spin Omega_y [rad/s]")
+    twin.legend(loc="upper center", fontsize=8)
+    for ax in axes:
+        ax.set_xlabel("free cell position x relative to the adherent cell [um]")
+        ax.legend(loc="best", fontsize=8)
+        ax.grid(alpha=0.3)
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(png_path, dpi=120)
+    plt.close(fig)
+    return png_path
+
+
+def outline(points: np.ndarray) -> np.ndarray:
+    """Closed outline (k + 1, 2) of 2-D points: their convex hull, the silhouette of a convex
+    body's projected nodes (the cells of the thesis are convex)."""
+    from scipy.spatial import ConvexHull
+
+    hull = points[ConvexHull(points).vertices]
+    return np.vstack([hull, hull[:1]])
+
+
+def snapshot_frames(time: np.ndarray, count: int = 4) -> np.ndarray:
+    """Indices of ``count`` frames evenly spread in time, first and last included."""
+    return np.unique([int(np.argmin(np.abs(time - t))) for t in np.linspace(time[0], time[-1], count)])
+
+
+def plot_run(h5_path, png_path=None) -> Path:
+    """Trajectories of a ``warpbem run`` file, like the thesis figures: height Z(t) and lateral
+    position Y(t) of every body, and the side (X-Z) and top (X-Y) views with the cells drawn
+    to scale (their outlines at a few times, fading from the first to the last; fixed cells
+    once) over the reference points' paths, so a reader sees where the free cell passed the
+    adherent ones and how close it came."""
+    from .xdmf import read_frames
+
+    plt = _pyplot()
+    h5_path = Path(h5_path)
+    png_path = Path(png_path) if png_path else h5_path.with_suffix(".png")
+    meshes, t, pos, orientations = read_frames(h5_path)
+    with open_result(h5_path) as f:
+        names = json.loads(f.attrs.get("body_names", "[]")) or [f"body {i}" for i in range(pos.shape[1])]
+        gap = f["closest_gap"][: len(t)] if "closest_gap" in f else None
+    moved = np.ptp(pos, axis=0).max(axis=1) > 0
+    fig, axes = plt.subplots(2, 2, figsize=(14, 8.5))
+    (height, lateral), (side, top) = axes
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    um = 1e6
+    snapshots = snapshot_frames(t)
+    for i, name in enumerate(names):
+        colour = colours[i % len(colours)]
+        style = "-" if moved[i] else ":"
+        height.plot(t, pos[:, i, 2] * um, style, color=colour, label=name)
+        lateral.plot(t, pos[:, i, 1] * um, style, color=colour, label=name)
+        frames = snapshots if moved[i] else snapshots[:1]
+        label = (f"{name}, outlines at t = " + ", ".join(f"{t[j]:.3g}" for j in frames) + " s") if moved[i] \
+            else f"{name} (fixed)"
+        for k, frame in enumerate(frames):
+            nodes = Body(meshes[i], position=pos[frame, i], orientation=orientations[frame, i]).world_nodes() * um
+            alpha = 0.25 + 0.75 * (k + 1) / len(frames)
+            for ax, axis in ((side, 2), (top, 1)):
+                line = outline(nodes[:, [0, axis]])
+                ax.fill(line[:, 0], line[:, 1], color=colour, alpha=0.12 * alpha)
+                ax.plot(line[:, 0], line[:, 1], color=colour, alpha=alpha, lw=1.2,
+                        label=label if k == 0 and ax is side else None)
+        if moved[i]:
+            side.plot(pos[:, i, 0] * um, pos[:, i, 2] * um, "--", color=colour, lw=0.8)
+            top.plot(pos[:, i, 0] * um, pos[:, i, 1] * um, "--", color=colour, lw=0.8)
+    side.axhline(0.0, color="k", lw=2)
+    side.annotate("wall", (0.01, 0.02), xycoords="axes fraction", fontsize=8)
+    height.set(xlabel="t [s]", ylabel="Z: centre height [um]")
+    lateral.set(xlabel="t [s]", ylabel="Y: lateral position [um]")
+    if gap is not None and np.isfinite(gap).any():
+        twin = height.twinx()
+        twin.plot(t, gap * 1e9, "k:", lw=1)
+        twin.set_ylabel("closest surface gap [nm] (dotted)")
+    side.set(xlabel="X [um]", ylabel="Z [um]", title="side view (to scale; dashed: reference point path)")
+    top.set(xlabel="X [um]", ylabel="Y [um]", title="top view (to scale)")
+    for ax in (side, top):
+        ax.set_aspect("equal", adjustable="datalim")
+    for ax in axes.ravel():
+        ax.grid(alpha=0.3)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=8)
+    fig.suptitle(h5_path.name)
+    fig.tight_layout()
+    fig.savefig(png_path, dpi=120)
+    plt.close(fig)
+    return png_path
+
+
+def plot(h5_path, png_path=None) -> Path:
+    """Chart of any warpbem result file: a run's trajectories or the demo's velocities."""
+    with open_result(h5_path) as f:
+        kind = "run" if "position" in f else "demo" if "free_velocity" in f else None
+    if kind is None:
+        raise RunFileError(f"{h5_path}: neither a run (warpbem run, sweep) nor a demo (warpbem demo) file")
+    return plot_run(h5_path, png_path) if kind == "run" else plot_demo(h5_path, png_path)

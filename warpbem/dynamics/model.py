@@ -1,0 +1,169 @@
+"""The static part of a scene (DESIGN.md §3): meshes, which bodies are fixed, the flow, the
+interactions that are switched on, solver and stepping options. Validated when made and
+frozen; the ``State`` holds what changes."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from ..forces.interaction import Interaction
+from ..hydro.mobility import MobilitySolver
+from ..surfaces.body import Body
+from ..surfaces.gaps import outer_radius
+from ..surfaces.mesh import Mesh
+from .integrate import SCHEMES
+from .state import State
+
+
+def _positive(name, value, allow_zero=False):
+    if isinstance(value, bool) or not np.isscalar(value) or not np.isfinite(value) or value < 0 or (
+            value == 0 and not allow_zero):
+        raise ValueError(f"{name} must be a {'non-negative' if allow_zero else 'positive'} finite number, got {value!r}")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class Flow:
+    """Undisturbed flow u = shear_rate z e_x (1/s) of viscosity (Pa s), above the no-slip wall
+    z = 0 if ``wall`` (else unbounded)."""
+
+    shear_rate: float = 0.0
+    viscosity: float = 1e-3
+    wall: bool = True
+
+    def __post_init__(self):
+        if isinstance(self.shear_rate, bool) or not np.isfinite(self.shear_rate):
+            raise ValueError(f"shear_rate must be a finite number (1/s), got {self.shear_rate!r}")
+        _positive("viscosity (Pa s)", self.viscosity)
+
+
+@dataclass(frozen=True)
+class SolverOptions:
+    """Options of the mobility solver (``MobilitySolver``): tolerance None follows the dtype."""
+
+    quadrature_order: int = 2
+    contact_refinement: float = 3.0
+    refine_fixed_at_wall: bool = True
+    tolerance: float | None = None
+    dtype: str = "float64"
+    operator: str = "auto"
+    max_iterations: int = 600
+
+    def build(self, flow: Flow, device) -> MobilitySolver:
+        return MobilitySolver(flow.shear_rate, flow.viscosity, flow.wall, device,
+                              quadrature_order=self.quadrature_order, tolerance=self.tolerance,
+                              max_iterations=self.max_iterations, dtype=self.dtype, operator=self.operator,
+                              contact_refinement=self.contact_refinement,
+                              refine_fixed_at_wall=self.refine_fixed_at_wall)
+
+
+@dataclass(frozen=True)
+class StepPolicy:
+    """Adaptive step: dt = dt_max far from contact, shrinking in proportion to the smallest gap
+    below ``contact_gap`` (m) down to dt_min (thesis ch. 3.3: 1e-4 to 1e-5 s)."""
+
+    dt_max: float = 1e-4
+    dt_min: float = 1e-5
+    contact_gap: float = 0.5e-6
+
+    def __post_init__(self):
+        if not (0 < self.dt_min <= self.dt_max) or not np.isfinite(self.dt_max):
+            raise ValueError(f"need 0 < dt_min <= dt_max, got dt_min={self.dt_min}, dt_max={self.dt_max}")
+        if not self.contact_gap > 0:
+            raise ValueError(f"contact_gap must be positive, got {self.contact_gap}")
+
+    def dt(self, gap: float) -> float:
+        return float(np.clip(self.dt_max * gap / self.contact_gap, self.dt_min, self.dt_max))
+
+    @staticmethod
+    def landing(planned: float, remaining: float) -> float:
+        """The step towards a time ``remaining`` (s) ahead (a frame time or the end): the whole
+        remainder if one planned step reaches it, else the remainder split in equal steps no
+        longer than ``planned``, so the stepping lands on it without a sliver of a last step."""
+        if not math.isfinite(remaining):
+            return planned
+        if remaining <= planned * (1 + 1e-9):
+            return remaining
+        return remaining / math.ceil(remaining / planned - 1e-9)
+
+
+@dataclass(frozen=True)
+class Model:
+    """Bodies (``meshes`` in metres about their reference points, ``fixed`` flags, ``names``),
+    the ``flow``, the ``interactions`` switched on (``forces``: Gravity, ExternalLoads,
+    Repulsion, ...), solver options, the step policy and the scheme ("euler" or "heun")."""
+
+    meshes: tuple
+    fixed: tuple
+    flow: Flow = Flow()
+    interactions: tuple = ()
+    solver: SolverOptions = SolverOptions()
+    policy: StepPolicy = StepPolicy()
+    scheme: str = "heun"
+    names: tuple = field(default=())
+
+    def __post_init__(self):
+        meshes, fixed = tuple(self.meshes), tuple(bool(f) for f in self.fixed)
+        if not meshes or not all(isinstance(m, Mesh) for m in meshes):
+            raise ValueError("a model needs at least one mesh, each a warpbem.mesh.Mesh")
+        if len(fixed) != len(meshes):
+            raise ValueError(f"fixed must have one flag per mesh ({len(meshes)}), got {len(fixed)}")
+        names = tuple(self.names) or tuple(f"body{i}" for i in range(len(meshes)))
+        if len(names) != len(meshes):
+            raise ValueError(f"names must have one name per mesh ({len(meshes)}), got {len(names)}")
+        if self.scheme not in SCHEMES:
+            raise ValueError(f"scheme must be one of {SCHEMES}, got {self.scheme!r}")
+        interactions = tuple(self.interactions)
+        for x in interactions:
+            if not isinstance(x, Interaction):
+                raise TypeError(f"interactions must be warpbem.forces Interaction objects, got {type(x).__name__}")
+        seen = [x.name for x in interactions]
+        if len(set(seen)) != len(seen):
+            raise ValueError(f"interaction names must be unique, got {seen}")
+        if sum(x.implicit for x in interactions) > 1:
+            # one backward-Euler solve per step; coupling several stiff laws needs a joint solve
+            raise ValueError(f"at most one implicit interaction, got {[x.name for x in interactions if x.implicit]}")
+        for name, value in (("meshes", meshes), ("fixed", fixed), ("names", names), ("interactions", interactions)):
+            object.__setattr__(self, name, value)
+
+    @property
+    def n_bodies(self) -> int:
+        return len(self.meshes)
+
+    @cached_property
+    def fixed_mask(self) -> np.ndarray:
+        mask = np.array(self.fixed, dtype=bool)
+        mask.setflags(write=False)
+        return mask
+
+    @cached_property
+    def outer_radii(self) -> np.ndarray:
+        return np.array([outer_radius(m) for m in self.meshes])
+
+    def interaction(self, name: str) -> Interaction | None:
+        """The interaction called ``name``, or None if it is not switched on."""
+        return next((x for x in self.interactions if x.name == name), None)
+
+    @property
+    def implicit(self) -> Interaction | None:
+        return next((x for x in self.interactions if x.implicit), None)
+
+    def bodies(self, state: State) -> list[Body]:
+        if len(state.positions) != self.n_bodies:
+            raise ValueError(f"the state has {len(state.positions)} bodies, the model {self.n_bodies}")
+        return [Body(m, position=p, orientation=q, fixed=f)
+                for m, p, q, f in zip(self.meshes, state.positions, state.orientations, self.fixed)]
+
+    def initial_state(self, positions, orientations=None, time: float = 0.0) -> State:
+        """The state at ``time`` with the bodies placed; each interaction's own part at its start."""
+        positions = np.asarray(positions, dtype=float)
+        if orientations is None:
+            orientations = np.tile([1.0, 0.0, 0.0, 0.0], (len(positions), 1))
+        start = State(time, positions, orientations)
+        bodies = self.bodies(start)
+        parts = {x.name: x.initial_state(bodies) for x in self.interactions if x.state_columns()}
+        return State(time, positions, orientations, parts=parts)

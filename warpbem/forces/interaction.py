@@ -1,0 +1,106 @@
+"""What an interaction is to the time step (DESIGN.md §3, step 3 "loads"): one object with a
+small protocol, so that a new force (bonds, Hertz contact, lubrication) plugs in without
+touching the step.
+
+An interaction is given the bodies of a state (``surfaces.Body``, SI) and that state's
+``Contacts`` (exact gaps, computed once per state and shared), and answers in one of two ways:
+
+* **explicit**: ``explicit_loads`` returns the force and torque it puts on each body (gravity,
+  given loads); the step adds them to the loads of the mobility solve;
+* **implicit** (stiff laws: repulsion, later bond springs): ``implicit_coordinates`` returns
+  scalar coordinates s_c (a separation, an extension; m) and the loads of a unit force along
+  each. The step solves the motion caused by each unit force (the mobility is linear), and the
+  interaction's ``implicit_magnitudes`` takes the forces at the end of the step (backward Euler):
+
+      s_c' = s_c + dt (r_c + sum_d B_cd f_d),   f_c = law_c(s_c'),
+
+  with r the rates of the coordinates without the interaction and B the response of the rates
+  to unit forces (symmetric by reciprocity). By virtual work the rate of a coordinate under
+  rigid motions (U_b, Omega_b) is sum_b unit_force_cb . U_b + unit_torque_cb . Omega_b, so the
+  same unit loads give both. ``magnitudes_at`` gives the law at the state itself (the frame's
+  record of the state).
+
+An interaction that carries state of its own (a bond table, a counter) declares it in
+``state_columns`` ({name: (unit, per-frame shape)}), gives its start in ``initial_state`` and
+its value after an accepted step in ``advance_state``; the step keeps it in
+``State.parts[interaction.name]``, frames write it as columns ``<name>_<column>`` and a resumed
+run reads it back.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Loads:
+    """Force (n, 3) N and torque (n, 3) N m about each body's reference point."""
+
+    force: np.ndarray
+    torque: np.ndarray
+
+    @classmethod
+    def zero(cls, n_bodies: int) -> "Loads":
+        return cls(np.zeros((n_bodies, 3)), np.zeros((n_bodies, 3)))
+
+    def __add__(self, other: "Loads") -> "Loads":
+        return Loads(self.force + other.force, self.torque + other.torque)
+
+
+@dataclass(frozen=True)
+class ImplicitCoordinates:
+    """Coordinates s_c (m) of an implicit interaction at one state, and the loads on every body of
+    a unit (1 N) force along each: ``unit_force``, ``unit_torque`` (m, n_bodies, 3)."""
+
+    values: np.ndarray
+    unit_force: np.ndarray
+    unit_torque: np.ndarray
+
+    def rates(self, velocity: np.ndarray, angular_velocity: np.ndarray) -> np.ndarray:
+        """ds_c/dt (m/s) for the rigid motions of the bodies (virtual work)."""
+        return (np.einsum("cbi,bi->c", self.unit_force, velocity)
+                + np.einsum("cbi,bi->c", self.unit_torque, angular_velocity))
+
+    def loads(self, magnitudes: np.ndarray, bodies_mask: np.ndarray | None = None) -> Loads:
+        """Loads of the forces ``magnitudes`` (N) along the coordinates, on the bodies of
+        ``bodies_mask`` only (all if None)."""
+        force = np.einsum("c,cbi->bi", magnitudes, self.unit_force)
+        torque = np.einsum("c,cbi->bi", magnitudes, self.unit_torque)
+        if bodies_mask is not None:
+            force[~bodies_mask] = 0.0
+            torque[~bodies_mask] = 0.0
+        return Loads(force, torque)
+
+
+class Interaction:
+    """Base of every interaction: by default it contributes nothing and owns no state; each
+    subclass overrides the methods of its kind (module docstring). ``name`` keys its frame
+    columns and its part of the state."""
+
+    name = "interaction"
+    implicit = False  # True: implicit_coordinates / implicit_magnitudes / magnitudes_at apply
+
+    def explicit_loads(self, bodies, contacts) -> Loads | None:
+        return None
+
+    def implicit_coordinates(self, bodies, contacts, velocity, angular_velocity, dt) -> ImplicitCoordinates | None:
+        """Coordinates that can matter over a step of at most ``dt`` (s) from this state, given the
+        bodies' motion without this interaction (m/s, rad/s); None if there are none."""
+        return None
+
+    def implicit_magnitudes(self, coordinates: ImplicitCoordinates, rates, response, dt) -> np.ndarray:
+        raise NotImplementedError(f"{type(self).__name__} is not an implicit interaction")
+
+    def magnitudes_at(self, coordinates: ImplicitCoordinates) -> np.ndarray:
+        raise NotImplementedError(f"{type(self).__name__} is not an implicit interaction")
+
+    def state_columns(self) -> dict:
+        return {}
+
+    def initial_state(self, bodies) -> dict:
+        return {}
+
+    def advance_state(self, part: dict, start_bodies, end_bodies, dt: float) -> dict:
+        return part
