@@ -1,48 +1,70 @@
-"""Row splitting across CPU threads: assembly and matrix-free apply with 1 thread vs all cores.
+"""Row splitting across CPU threads: assembly and matrix-free apply with 1 thread, with all
+cores and one row block per thread (the split before issue 8), and with all cores and
+``runtime.CHUNKS_PER_THREAD`` blocks per thread taken as threads come free (the split now).
 
-A Warp CPU launch runs on one core; warpbem launches row blocks from a thread pool. This prints
-the times side by side, measured in the same run, and the speed-up ratio.
+A Warp CPU launch runs on one core; warpbem launches row blocks from a thread pool. Two cases:
+twelve spheres far apart (rows of equal cost), one sphere 0.05 radius above the wall with the
+default contact refinement, and that sphere among the twelve (its refined rows, which need the
+adaptive quadrature, come first, so one block per thread leaves one thread most of the work). Times are
+measured side by side in one run.
 
-    python benchmarks/cpu_threads.py [--bodies 12] [--subdivisions 4] [--repeats 3]
+    python benchmarks/cpu_threads.py [--subdivisions 4] [--repeats 3]
 """
 
 import argparse
 
 import numpy as np
 
-from common import best_time
+from common import best_time, print_table, write_csv
 from warpbem import Body, mesh, runtime
 from warpbem.hydro.geometry import SurfaceGeometry
 from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions
 
 
+def cases(subdivisions):
+    sphere = mesh.sphere(1.0, subdivisions)
+    spread = [Body(sphere, position=(3.0 * i, 0.0, 1.5)) for i in range(12)]
+    near = [Body(sphere, position=(0.0, 0.0, 1.05))]
+    order = QuadratureOptions().order
+    return {"12 spheres, h/a = 1.5": SurfaceGeometry.from_bodies(spread, order, 1.0, True),
+            "1 sphere, h/a = 1.05, refined": SurfaceGeometry.from_bodies(near, order, 1.0, True, 3.0),
+            "the same + 12 spheres at h/a = 1.5": SurfaceGeometry.from_bodies(
+                near + [Body(sphere, position=(3.0 * (i + 1), 0.0, 1.5)) for i in range(12)], order, 1.0, True, 3.0)}
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--bodies", type=int, default=12)
     parser.add_argument("--subdivisions", type=int, default=4)
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
-    sphere = mesh.sphere(1.0, args.subdivisions)
-    bodies = [Body(sphere, position=(3.0 * i, 0.0, 1.5)) for i in range(args.bodies)]
-    geometry = SurfaceGeometry.from_bodies(bodies, QuadratureOptions().order, 1.0, True)
-    q = np.random.default_rng(0).standard_normal(3 * geometry.n_elements)
-    all_cores = runtime.cpu_threads()
+    all_cores, chunks = runtime.cpu_threads(), runtime.CHUNKS_PER_THREAD
+    splits = {"1 thread": (1, 1), f"{all_cores} threads, 1 block each": (all_cores, 1),
+              f"{all_cores} threads, {chunks} blocks each": (all_cores, chunks)}
     rows = []
-    for threads in (1, all_cores):
-        runtime.cpu_threads = lambda n=threads: n  # noqa: E731  (benchmark-only override)
+    for case, geometry in cases(args.subdivisions).items():
+        q = np.random.default_rng(0).standard_normal(3 * geometry.n_elements)
+        times = {}
+        for split, (threads, per_thread) in splits.items():
+            runtime.cpu_threads = lambda n=threads: n  # noqa: E731  (benchmark-only override)
+            runtime.CHUNKS_PER_THREAD = per_thread
 
-        def assemble():
-            DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="dense").assemble()
+            def assemble():
+                DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="dense").assemble()
 
-        op = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="matrix_free")
-        op.matvec(q)  # compile and build the self blocks outside the timing
-        rows.append((threads, best_time(assemble, args.repeats), best_time(lambda: op.matvec(q), args.repeats)))
-    print(f"{args.bodies} bodies x {sphere.n_elements} elements = {geometry.n_elements} elements")
-    print(f"{'threads':>8} {'assembly [s]':>13} {'matrix-free apply [s]':>22}")
-    for threads, a, m in rows:
-        print(f"{threads:8d} {a:13.3f} {m:22.3f}")
-    print(f"speed-up with {all_cores} threads: assembly x{rows[0][1] / rows[1][1]:.2f},"
-          f" matrix-free apply x{rows[0][2] / rows[1][2]:.2f}")
+            def self_blocks():  # the matrix-free set-up: row sums over each element's own body
+                DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="matrix_free")._self_blocks()
+
+            op = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="matrix_free")
+            op.matvec(q)  # compile and build the self blocks outside the timing
+            times[split] = (best_time(assemble, args.repeats), best_time(self_blocks, args.repeats),
+                            best_time(lambda: op.matvec(q), args.repeats))
+        one = times["1 thread"]
+        for split, (a, b, m) in times.items():
+            rows.append({"case": case, "elements": geometry.n_elements, "split": split, "assembly_s": a,
+                         "self_blocks_s": b, "apply_s": m, "assembly_x": one[0] / a, "self_blocks_x": one[1] / b,
+                         "apply_x": one[2] / m})
+    print_table(rows, {k: "{:.3f}" if k.endswith("_s") else "{:.2f}" for k in rows[0] if k[-2:] in ("_s", "_x")})
+    print(f"table: {write_csv('cpu_threads.csv', rows)}")
 
 
 if __name__ == "__main__":

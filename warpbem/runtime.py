@@ -5,8 +5,10 @@
 before ``wp.init()``, so tests and CI reuse compiled kernels. Nothing here runs at import.
 
 A Warp launch on the CPU runs on one core but releases the GIL, so ``launch_rows`` splits the
-rows of a kernel into blocks launched from a small thread pool (one block per core); on CUDA it
-launches once.
+rows of a kernel into blocks launched from a small thread pool; on CUDA it launches once. Rows
+cost unequal amounts (near contact the refined elements, whose rows need the adaptive
+quadrature most, are appended at the end of their body), so there are CHUNKS_PER_THREAD blocks
+per thread, taken by the threads as they come free, rather than one block per thread.
 """
 
 from __future__ import annotations
@@ -18,6 +20,8 @@ from pathlib import Path
 import numpy as np
 
 _POOL: ThreadPoolExecutor | None = None
+CHUNKS_PER_THREAD = 8
+MIN_CHUNK_ROWS = 16  # fewer rows per launch would cost more in launch overhead than they balance
 _INITIALISED = False
 
 
@@ -82,8 +86,10 @@ def cpu_threads() -> int:
 
 
 def row_blocks(n_rows: int, device) -> list[tuple[int, int]]:
-    """Row ranges to launch: one per CPU thread, or one on a GPU."""
-    n_blocks = cpu_threads() if device.is_cpu else 1
+    """Row ranges to launch: CHUNKS_PER_THREAD per CPU thread (at least MIN_CHUNK_ROWS rows
+    each, and one per thread at least), or one on a GPU."""
+    threads = cpu_threads()
+    n_blocks = max(min(threads * CHUNKS_PER_THREAD, n_rows // MIN_CHUNK_ROWS), threads) if device.is_cpu else 1
     edges = np.linspace(0, n_rows, min(n_blocks, max(n_rows, 1)) + 1).astype(int)
     return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]) if b > a]
 
@@ -105,12 +111,14 @@ def launch_rows(kernel, n_rows: int, make_inputs, device, extra_dim: int | None 
 
     # compile/load before the threads start, so they never race on the module
     wp.load_module(kernel.module, device=device)
-    if len(blocks) == 1:
-        run(blocks[0])
+    threads = cpu_threads()
+    if len(blocks) == 1 or threads == 1:
+        for block in blocks:
+            run(block)
     else:
         global _POOL
-        if _POOL is None:
-            _POOL = ThreadPoolExecutor(max_workers=cpu_threads(), thread_name_prefix="warpbem")
+        if _POOL is None or _POOL._max_workers != threads:  # a pool of the size asked for
+            _POOL = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="warpbem")
         list(_POOL.map(run, blocks))
     if not device.is_cpu:
         wp.synchronize_device(device)

@@ -190,3 +190,58 @@ def test_block_jacobi_preconditioner_matches_plain_gmres_and_is_kept_for_fixed_b
             assert system.factors[1] is factors  # the fixed cell's LU, kept
             assert system.factors[0] is not first_free  # the free cell's, redone
         factors, first_free = system.factors[1], system.factors[0]
+
+
+@pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")  # unrefined on purpose: a short test
+def test_block_jacobi_preconditioner_in_matrix_free_mode():
+    """Matrix-free operators keep the preconditioner: each body's own block is assembled alone
+    (its integrals are those of the whole operator's diagonal block), so the box-shaped adherent
+    cell converges as fast as with the assembled matrix, to the same motion."""
+    from pathlib import Path
+
+    box = wb.mesh.load(Path(__file__).resolve().parents[2] / "scenes" / "adherent_box.q9")
+    bodies = [wb.Body(wb.mesh.sphere(5e-6, 2), position=(-20e-6, 3.5e-6, 11e-6)),
+              wb.Body(box, position=(0.0, 0.0, 3.25e-6), fixed=True)]
+    dense = wb.solve_mobility(bodies, 100.0, 1.2e-3, operator="dense", contact_refinement=0.0)
+    free = wb.solve_mobility(bodies, 100.0, 1.2e-3, operator="matrix_free", contact_refinement=0.0)
+    assert free.operator_mode == "matrix_free"
+    assert free.iterations <= dense.iterations + 1 and free.iterations < 30  # plain GMRES: hundreds
+    np.testing.assert_allclose(free.velocity, dense.velocity, rtol=0, atol=1e-7 * np.abs(dense.velocity).max())
+    np.testing.assert_allclose(free.force, dense.force, rtol=0, atol=1e-7 * np.abs(dense.force).max())
+
+
+def test_float32_converges_with_its_default_tolerance():
+    """dtype="float32" needs no tolerance of its own: the default follows the precision (1e-6;
+    float32 products cannot reach float64's 1e-8) and agrees with float64 to single precision."""
+    d = wb.solve_mobility(_scene(), shear_rate=1.0, viscosity=1e-3)
+    s = wb.solve_mobility(_scene(), shear_rate=1.0, viscosity=1e-3, dtype="float32")
+    assert s.converged and s.residual < 1e-5 and d.residual < 1e-7
+    np.testing.assert_allclose(s.velocity, d.velocity, atol=2e-5 * np.abs(d.velocity).max())
+    assert wb.MobilitySolver(dtype="float32").tolerance == 1e-6 and wb.MobilitySolver().tolerance == 1e-8
+    with pytest.raises(ValueError, match="dtype must be one of"):
+        wb.MobilitySolver(dtype="float16")
+
+
+def test_kept_system_is_never_taken_for_a_new_mesh():
+    """The solver keeps the system of its last bodies while they stay the same. A new mesh in
+    the same place is not the same body, even where CPython hands the new mesh the address (the
+    id) of a collected one: the solver holds the meshes of its key, so they are not collected,
+    and a mesh of another shape gets its own answer."""
+    import gc
+    import weakref
+
+    solver = wb.MobilitySolver(shear_rate=1.0, viscosity=1.0)
+    first = wb.mesh.sphere(1.0, 2)
+    held = weakref.ref(first)
+    old_id = id(first)
+    sphere_motion = solver.solve([wb.Body(first, position=(0, 0, 1.5))]).velocity[0, 0]
+    del first
+    gc.collect()
+    assert held() is not None  # kept alive by the solver's key: its id cannot come back
+    for _ in range(200):  # try to get a new mesh at the old address anyway
+        candidate = wb.mesh.spheroid(1.0, 0.5, subdivisions=2)
+        if id(candidate) == old_id:
+            break
+    flat = solver.solve([wb.Body(candidate, position=(0, 0, 1.5))]).velocity[0, 0]
+    fresh = wb.solve_mobility([wb.Body(candidate, position=(0, 0, 1.5))], shear_rate=1.0, viscosity=1.0).velocity[0, 0]
+    assert flat == pytest.approx(fresh, rel=1e-7) and abs(flat / sphere_motion - 1) > 1e-3

@@ -24,6 +24,10 @@ GCB_B = {1.5: dict(U=0.91468, Omega=0.45843), 3.0: dict(U=0.98904, Omega=0.49454
 
 SEED = dict(subdivisions=4, contact_refinement=0.0)  # the seed's 96-element sphere, nothing added
 REFINED = dict(subdivisions=8, contact_refinement=3.0)
+# the translation-rotation coupling Tt (1.7e-2 at h/a = 1.5, 1.0e-3 at 3) is a small difference of
+# large surface tractions: it converges at second order, measured 3.5-4.0 % off on the seed mesh
+# and 0.9-1.0 % on k = 8 (relative; an absolute 1e-3 would have let all of it go at h/a = 3)
+COUPLING_TOLERANCE = {4: 0.05, 8: 0.0125}
 
 
 def _solve_options(config):
@@ -45,26 +49,28 @@ def test_brenner_normal_motion(sphere_mesh, h, config, tol):
 def test_goldman_cox_brenner_parallel_translation_and_rotation(sphere_mesh, h, config, tol):
     """GCB 1967a: translating U e_x: F_x = -6 pi mu a U Ft, T_y = +8 pi mu a^2 U Tt;
     rotating Omega e_y: F_x = +6 pi mu a^2 Omega Fr, T_y = -8 pi mu a^3 Omega Tr, Fr = 4/3 Tt.
-    Holding loads are minus these. Tolerance: relative for Ft, Tr; absolute 1e-3 for Tt."""
+    Holding loads are minus these. Tolerances relative: ``tol`` for Ft, Tr; COUPLING_TOLERANCE
+    for Tt and Fr."""
     ref = GCB_A[h]
+    coupling = COUPLING_TOLERANCE[config["subdivisions"]]
     m = sphere_mesh(config["subdivisions"])
     f, t = resistance(m, (0, 0, h), np.array([1.0, 0, 0, 0, 0, 0]), **_solve_options(config))
     assert abs(f[0] / (6 * np.pi * ref["Ft"]) - 1) < tol
-    assert abs(-t[1] / (8 * np.pi) - ref["Tt"]) < 1e-3
+    assert abs(-t[1] / (8 * np.pi) / ref["Tt"] - 1) < coupling
     f, t = resistance(m, (0, 0, h), np.array([0, 0, 0, 0, 1.0, 0]), **_solve_options(config))
     assert abs(t[1] / (8 * np.pi * ref["Tr"]) - 1) < tol
-    assert abs(-f[0] / (6 * np.pi) - 4 / 3 * ref["Tt"]) < 1e-3
+    assert abs(-f[0] / (6 * np.pi) / (4 / 3 * ref["Tt"]) - 1) < coupling
 
 
 @pytest.mark.parametrize("h", [1.5, 3.0])
 @pytest.mark.parametrize("config, tol", [(SEED, 0.02), (REFINED, 0.005)])
 def test_free_sphere_in_wall_bounded_shear(sphere_mesh, h, config, tol):
     """GCB 1967b: a force- and torque-free sphere in u = gdot z e_x translates at U and spins at
-    Omega_y (validation.md). Tolerance 1 % for U in the reference; 5e-3 absolute on Omega."""
+    Omega_y (validation.md). Tolerances relative, ``tol`` for both (Omega measured 0.2 % / 0.05 % off)."""
     body = wb.Body(sphere_mesh(config["subdivisions"]), position=(0, 0, h))
     sol = wb.solve_mobility([body], shear_rate=1.0, viscosity=1.0, **_solve_options(config))
     assert abs(sol.velocity[0, 0] / h / GCB_B[h]["U"] - 1) < tol
-    assert abs(sol.angular_velocity[0, 1] - GCB_B[h]["Omega"]) < min(tol, 5e-3)
+    assert abs(sol.angular_velocity[0, 1] / GCB_B[h]["Omega"] - 1) < tol
     assert np.abs(sol.velocity[0, 1:]).max() < 1e-6  # no drift across or towards the wall
 
 

@@ -75,16 +75,26 @@ def snapshot_frames(time: np.ndarray, count: int = 4) -> np.ndarray:
 
 
 def plot_run(h5_path, png_path=None) -> Path:
-    """Trajectories of a ``warpbem run`` file, like the thesis figures: height Z(t) and lateral
-    position Y(t) of every body, and the side (X-Z) and top (X-Y) views with the cells drawn
-    to scale (their outlines at a few times, fading from the first to the last; fixed cells
-    once) over the reference points' paths, so a reader sees where the free cell passed the
-    adherent ones and how close it came."""
+    """The PNG chart of a ``warpbem run`` file (``run_figure``), beside it by default."""
+    plt = _pyplot()
+    h5_path = Path(h5_path)
+    png_path = Path(png_path) if png_path else h5_path.with_suffix(".png")
+    fig = run_figure(h5_path)
+    fig.savefig(png_path, dpi=120)
+    plt.close(fig)
+    return png_path
+
+
+def run_figure(h5_path):
+    """Trajectories of a run, like the thesis figures: height Z(t) and lateral position Y(t) of
+    every body (with the closest gap), and the side (X-Z) and top (X-Y) views with the cells
+    drawn to scale (their outlines at a few times, fading in from the first to the last; fixed
+    cells once) over the reference points' paths, so a reader sees where the free cell passed
+    the adherent ones and how close it came."""
     from .xdmf import read_frames
 
     plt = _pyplot()
     h5_path = Path(h5_path)
-    png_path = Path(png_path) if png_path else h5_path.with_suffix(".png")
     meshes, t, pos, orientations = read_frames(h5_path)
     with open_result(h5_path) as f:
         names = json.loads(f.attrs.get("body_names", "[]")) or [f"body {i}" for i in range(pos.shape[1])]
@@ -132,9 +142,7 @@ def plot_run(h5_path, png_path=None) -> Path:
             ax.legend(fontsize=8)
     fig.suptitle(h5_path.name)
     fig.tight_layout()
-    fig.savefig(png_path, dpi=120)
-    plt.close(fig)
-    return png_path
+    return fig
 
 
 def plot(h5_path, png_path=None) -> Path:

@@ -83,11 +83,10 @@ class Evaluation:
         """The record of this state; ``dt`` (s): the step that led here."""
         b = self.background
         velocity, angular_velocity, force, torque = b.velocity, b.angular_velocity, b.force, b.torque
-        loads = dict(self.explicit)
+        zero = Loads.zero(self.model.n_bodies)
+        loads = {x.name: self.explicit.get(x.name, zero) for x in self.model.interactions}
         iterations, residual = b.iterations, b.residual
         implicit = self.model.implicit
-        if implicit is not None:
-            loads[implicit.name] = Loads.zero(self.model.n_bodies)
         if self.implicit is not None:
             at_state = implicit.magnitudes_at(self.implicit.coordinates)
             velocity, angular_velocity, force, torque = self._with(at_state)

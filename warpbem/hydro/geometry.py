@@ -71,6 +71,20 @@ class SurfaceGeometry:
             same[p] = a1 - a0 == b1 - b0 and np.array_equal(previous.element_nodes[a0:a1], self.element_nodes[b0:b1])
         return same
 
+    def body(self, p: int) -> "SurfaceGeometry":
+        """The geometry of body p alone: its elements (refined as here), its own range 0..E_p.
+        An operator on it has exactly the diagonal block of body p of an operator on all bodies,
+        since an element integral depends only on its element and its pole (and the wall)."""
+        start, stop = self.body_ranges[p]
+        own = slice(start, stop)
+        return SurfaceGeometry(
+            length_scale=self.length_scale, element_nodes=self.element_nodes[own],
+            body_of_element=np.zeros(stop - start, dtype=self.body_of_element.dtype),
+            body_ranges=np.array([[0, stop - start]]), centres=self.centres[p : p + 1],
+            collocation=self.collocation[own], element_radius=self.element_radius[own], areas=self.areas[own],
+            qp_positions=self.qp_positions[own], qp_area_vectors=self.qp_area_vectors[own], order=self.order,
+            unresolved_contacts={})
+
     def elements_of(self, bodies) -> np.ndarray:
         """Element indices of the given bodies, in order."""
         return np.concatenate([np.arange(*self.body_ranges[p]) for p in bodies] or [np.zeros(0, int)])

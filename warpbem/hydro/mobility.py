@@ -230,12 +230,11 @@ class CompletedDoubleLayer:
     def linear_operator(self) -> spla.LinearOperator:
         return spla.LinearOperator((self.size, self.size), matvec=self.matvec, dtype=np.float64)
 
-    def body_block(self, body: int, dense: np.ndarray) -> np.ndarray:
-        """The diagonal block of ``matvec`` for one body's density, from the host copy ``dense``
-        of the operator's matrix: D (I - Pi) + Pi (free) or + C L Pi (fixed: its load columns),
+    def body_block(self, body: int, matrix: np.ndarray) -> np.ndarray:
+        """The diagonal block of ``matvec`` for one body's density, from that body's own block
+        ``matrix`` of 1/2 + D: D (I - Pi) + Pi (free) or + C L Pi (fixed: its load columns),
         Pi = Phi Phi^T W."""
         rows = self.ranges[body]
-        matrix = dense[rows, rows].astype(np.float64)
         modes, weighted = self.modes[body], self.modes[body].T * self.weights[rows]  # Pi = modes @ weighted
         block = matrix - (matrix @ modes) @ weighted
         if self.fixed[body]:
@@ -244,7 +243,7 @@ class CompletedDoubleLayer:
             return block + self.fixed_columns[rows, k : k + 6] @ loads
         return block + modes @ weighted
 
-    def preconditioner(self, previous: "CompletedDoubleLayer | None") -> spla.LinearOperator | None:
+    def preconditioner(self, previous: "CompletedDoubleLayer | None") -> spla.LinearOperator:
         """Block Jacobi: the exact inverse of each body's own block (LU), kept for bodies that
         did not change since ``previous``. It takes the ill-conditioning of a body near the wall
         (its own image) out of GMRES: the box-shaped adherent cell's unrefined flat base 0.25 um
@@ -252,22 +251,19 @@ class CompletedDoubleLayer:
         iterations. A moving body's block is factored anew at each solve, so only up to
         FACTOR_LIMIT unknowns (the LU costs n^3: a sphere refined to 1500 elements near the wall
         took 12-30 s to factor against 3-9 s of plain GMRES); larger moving bodies go without.
-        Dense operators only (a matrix-free body block would need its own assembly)."""
-        if self.operator.mode != "dense":
-            return None
+        Matrix-free operators assemble each body's block alone for it (DoubleLayerOperator.
+        diagonal_blocks), so large scenes keep the preconditioner."""
         if self.factors is not None:  # built for this system already
             return self._block_jacobi
         old = previous.factors if previous is not None and previous.factors is not None else []
-        dense = None
-        self.factors = []
-        for p, rows in enumerate(self.ranges):
-            if p < len(old) and old[p] is not None and self.unchanged[p] and previous.fixed[p] == self.fixed[p]:
-                self.factors.append(old[p])
-            elif self.fixed[p] or rows.stop - rows.start <= FACTOR_LIMIT:
-                dense = self.operator.assemble().numpy() if dense is None else dense  # one copy off a GPU
-                self.factors.append(scipy.linalg.lu_factor(self.body_block(p, dense)))
-            else:
-                self.factors.append(None)
+        kept = [p < len(old) and old[p] is not None and self.unchanged[p] and previous.fixed[p] == self.fixed[p]
+                for p in range(len(self.ranges))]
+        needed = [p for p, rows in enumerate(self.ranges)
+                  if not kept[p] and (self.fixed[p] or rows.stop - rows.start <= FACTOR_LIMIT)]
+        blocks = self.operator.diagonal_blocks(needed)
+        self.factors = [old[p] if kept[p] else
+                        scipy.linalg.lu_factor(self.body_block(p, blocks[p])) if p in blocks else None
+                        for p in range(len(self.ranges))]
 
         def apply(r):
             out = r.copy()
