@@ -36,7 +36,7 @@ def build_kernels(dtype, wall: bool) -> SimpleNamespace:
 
     @wp.struct
     class Surface:
-        """Element data of all bodies (see warpbem/geometry.py) and the quadrature settings."""
+        """Element data of all bodies (see warpbem/hydro/geometry.py) and the quadrature settings."""
 
         poles: wp.array(dtype=vec3)  # collocation points, one per element
         nodes: wp.array(dtype=vec3)  # 9 per element

@@ -8,7 +8,7 @@ from types import SimpleNamespace
 import warp as wp
 
 # (s, t) index (0, 1, 2 for -1, 0, 1) of each QUAD9 node, in the order of
-# warpbem.quad9.REFERENCE_NODES: corners 0-3 counter-clockwise, mid-edges 4-7, centre 8
+# warpbem.surfaces.quad9.REFERENCE_NODES: corners 0-3 counter-clockwise, mid-edges 4-7, centre 8
 _NODE_INDEX = wp.types.vector(9, wp.int32)
 NODE_S = wp.constant(_NODE_INDEX(0, 2, 2, 0, 1, 2, 1, 0, 1))
 NODE_T = wp.constant(_NODE_INDEX(0, 0, 2, 2, 0, 1, 2, 1, 1))

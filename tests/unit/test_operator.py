@@ -1,4 +1,4 @@
-"""The double-layer operator (warpbem/operators.py): identity, quadrature, apply modes."""
+"""The double-layer operator (warpbem/hydro/operators.py): identity, quadrature, apply modes."""
 
 import numpy as np
 import pytest

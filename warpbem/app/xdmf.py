@@ -8,7 +8,7 @@ can be looked at: the frames complete in every column so far are taken.
 
 Element node order: XDMF's ``Quadrilateral_9`` is read as VTK_BIQUADRATIC_QUAD (corners
 counter-clockwise, then the mid-edge nodes of edges 01, 12, 23, 30, then the centre), which is
-the order of ``warpbem.quad9.REFERENCE_NODES``, so the connectivity is written unchanged.
+the order of ``warpbem.surfaces.quad9.REFERENCE_NODES``, so the connectivity is written unchanged.
 """
 
 from __future__ import annotations

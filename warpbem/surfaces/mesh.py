@@ -1,7 +1,7 @@
 """QUAD9 surface meshes of closed bodies: generators, file I/O and consistency checks.
 
 A mesh is a set of nodes and, per element, the indices of its 9 nodes in the order of
-``warpbem.quad9.REFERENCE_NODES``. Elements are oriented so that x_s x x_t points out of the
+``warpbem.surfaces.quad9.REFERENCE_NODES``. Elements are oriented so that x_s x x_t points out of the
 body. Coordinates are in metres, relative to the body's reference point (its centre for
 torques and rotations; it must lie inside the body).
 
