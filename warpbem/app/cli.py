@@ -87,9 +87,14 @@ def _run(args, parser):
 def _sweep(args, parser):
     from .sweep import sweep
 
-    summary = sweep(args.scene, args.vary, args.output_dir, args.device, args.workers,
-                    progress=lambda line: print(line, flush=True), scheduler=args.scheduler,
-                    overwrite=args.overwrite)
+    try:
+        summary = sweep(args.scene, args.vary, args.output_dir, args.device, args.workers,
+                        progress=lambda line: print(line, flush=True), scheduler=args.scheduler,
+                        overwrite=args.overwrite)
+    except KeyboardInterrupt:
+        print(f"interrupted: the points so far are in {args.output_dir}; the same command resumes the sweep",
+              file=sys.stderr)
+        return 130
     print(f"summary: {summary}")
     return 0
 

@@ -119,8 +119,11 @@ class Scene:
         """The time (s) the next step must not pass: the next frame time or the end."""
         if self.frame_interval is None:
             return self.end
-        k = math.floor(time / self.frame_interval * (1 + 1e-12)) + 1
-        return min(k * self.frame_interval, self.end)
+        k = round(time / self.frame_interval)
+        stop = k * self.frame_interval  # the same expression as the time a landing step sets
+        if stop <= time:
+            stop = (k + 1) * self.frame_interval
+        return min(stop, self.end)
 
     def frame_due(self, state: State, stop: float) -> bool:
         """Whether ``state``, reached by a step towards ``stop``, is written as a frame."""
