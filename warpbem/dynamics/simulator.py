@@ -118,34 +118,35 @@ class Simulator:
         if self._latest is not None and self._latest.state is state and dt_plan is None:
             return self._latest
         model = self.model
-        bodies = model.bodies(state)
+        bodies = model.bodies(state)  # geometry
         check_placement(bodies, model.flow.wall)
-        contacts = Contacts(bodies, model.outer_radii, model.flow.wall, self.gaps)
+        contacts = Contacts(bodies, model.outer_radii, model.flow.wall, self.gaps)  # gaps, once per state
         if dt_plan is None:
             dt_plan = model.policy.dt(contacts.smallest(model.policy.contact_gap))
-        explicit = {}
-        for x in model.interactions:
-            loads = x.explicit_loads(bodies, contacts)
-            if loads is not None:
-                explicit[x.name] = loads
+        explicit = {x.name: loads for x in model.interactions
+                    if (loads := x.explicit_loads(bodies, contacts)) is not None}
         total = sum(explicit.values(), Loads.zero(model.n_bodies))
         background = self.solver.solve(bodies, forces=total.force, torques=total.torque, check_placement_first=False)
-        implicit = None
+        implicit = self._implicit(bodies, contacts, background, dt_plan)
+        self._latest = Evaluation(model, state, contacts, dt_plan, explicit, background, implicit)
+        return self._latest
+
+    def _implicit(self, bodies, contacts, background, dt_plan) -> Implicit | None:
+        """The implicit interaction's coordinates at this state and the solves of a probe force
+        along each (the same system as ``background``, no background flow)."""
+        model = self.model
         coordinates = None if model.implicit is None else model.implicit.implicit_coordinates(
             bodies, contacts, background.velocity, background.angular_velocity, dt_plan)
-        if coordinates is not None:
-            free = ~model.fixed_mask
-            responses = [self.solver.solve(bodies, forces=PROBE_FORCE * f * free[:, None],
-                                           torques=PROBE_FORCE * t * free[:, None],
-                                           check_placement_first=False, background=False)
-                         for f, t in zip(coordinates.unit_force, coordinates.unit_torque)]
-            matrix = np.array([coordinates.rates(r.velocity, r.angular_velocity) for r in responses]).T / PROBE_FORCE
-            rates = coordinates.rates(background.velocity, background.angular_velocity)
-            # symmetric by reciprocity: averaging removes the GMRES noise
-            implicit = Implicit(coordinates, responses, rates, 0.5 * (matrix + matrix.T))
-        evaluation = Evaluation(model, state, contacts, dt_plan, explicit, background, implicit)
-        self._latest = evaluation
-        return evaluation
+        if coordinates is None:
+            return None
+        free = ~model.fixed_mask[:, None]
+        responses = [self.solver.solve(bodies, forces=PROBE_FORCE * f * free, torques=PROBE_FORCE * t * free,
+                                       check_placement_first=False, background=False)
+                     for f, t in zip(coordinates.unit_force, coordinates.unit_torque)]
+        matrix = np.array([coordinates.rates(r.velocity, r.angular_velocity) for r in responses]).T / PROBE_FORCE
+        rates = coordinates.rates(background.velocity, background.angular_velocity)
+        # symmetric by reciprocity: averaging removes the GMRES noise
+        return Implicit(coordinates, responses, rates, 0.5 * (matrix + matrix.T))
 
     def frame(self, state: State) -> Frame:
         """The frame of a state no step led to (the first of a run)."""
