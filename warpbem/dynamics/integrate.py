@@ -15,6 +15,7 @@ from .state import State
 
 SCHEMES = ("euler", "heun")
 
+
 def quaternion_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Hamilton product of quaternions (w, x, y, z), row by row."""
     aw, av = a[..., :1], a[..., 1:]

@@ -5,7 +5,7 @@ frozen; the ``State`` holds what changes."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
@@ -17,13 +17,6 @@ from ..surfaces.gaps import outer_radius
 from ..surfaces.mesh import Mesh
 from .integrate import SCHEMES
 from .state import State
-
-
-def _positive(name, value, allow_zero=False):
-    if isinstance(value, bool) or not np.isscalar(value) or not np.isfinite(value) or value < 0 or (
-            value == 0 and not allow_zero):
-        raise ValueError(f"{name} must be a {'non-negative' if allow_zero else 'positive'} finite number, got {value!r}")
-    return float(value)
 
 
 @dataclass(frozen=True)
@@ -38,7 +31,8 @@ class Flow:
     def __post_init__(self):
         if isinstance(self.shear_rate, bool) or not np.isfinite(self.shear_rate):
             raise ValueError(f"shear_rate must be a finite number (1/s), got {self.shear_rate!r}")
-        _positive("viscosity (Pa s)", self.viscosity)
+        if isinstance(self.viscosity, bool) or not (np.isfinite(self.viscosity) and self.viscosity > 0):
+            raise ValueError(f"viscosity (Pa s) must be a positive finite number, got {self.viscosity!r}")
 
 
 @dataclass(frozen=True)
@@ -104,7 +98,7 @@ class Model:
     solver: SolverOptions = SolverOptions()
     policy: StepPolicy = StepPolicy()
     scheme: str = "heun"
-    names: tuple = field(default=())
+    names: tuple = ()
 
     def __post_init__(self):
         meshes, fixed = tuple(self.meshes), tuple(bool(f) for f in self.fixed)

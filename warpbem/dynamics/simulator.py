@@ -154,9 +154,9 @@ class Simulator:
 
     def step(self, state: State, t_stop: float = math.inf) -> tuple[State, Frame]:
         """One step from ``state``, never past ``t_stop`` (s; landing on it exactly)."""
-        start = self.evaluate(state)  # geometry, contacts, loads, mobility (kept from the last step)
         if not t_stop > state.time:
             raise ValueError(f"t_stop = {t_stop!r} s is not after the state's time {state.time!r} s")
+        start = self.evaluate(state)  # geometry, contacts, loads, mobility (kept from the last step)
         dt = self.model.policy.landing(start.planned_dt, t_stop - state.time)
         while True:
             try:
@@ -177,9 +177,11 @@ class Simulator:
             return start.motion(dt) if s is state else self.evaluate(s, dt).motion(dt)
 
         moved, _ = integrate.step(state, motion, dt, self.model.scheme)
-        end_bodies, start_bodies = self.model.bodies(moved), self.model.bodies(state)
-        parts = {x.name: x.advance_state(state.parts[x.name], start_bodies, end_bodies, dt)
-                 for x in self.model.interactions if x.name in state.parts}
+        parts = {}
+        if state.parts:  # interactions that own state advance it over the accepted motion
+            end_bodies = self.model.bodies(moved)
+            parts = {x.name: x.advance_state(state.parts[x.name], start.contacts.bodies, end_bodies, dt)
+                     for x in self.model.interactions if x.name in state.parts}
         moved = replace(moved, time=moved.time if landing is None else landing, steps=state.steps + 1, parts=parts)
         return self.evaluate(moved)
 
