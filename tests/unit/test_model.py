@@ -24,11 +24,6 @@ def test_model_and_state_refuse_what_cannot_run():
     with pytest.raises(ValueError, match="names must be unique"):
         Model([SPHERE], [False], interactions=[Repulsion(), Repulsion()])
 
-    class Stiff(Interaction):
-        name, implicit = "stiff", True
-
-    with pytest.raises(ValueError, match="at most one implicit interaction"):
-        Model([SPHERE], [False], interactions=[Repulsion(), Stiff()])
     with pytest.raises(ValueError, match="viscosity"):
         Flow(1.0, -1.0)
     with pytest.raises(ValueError, match="densities must be"):
@@ -159,7 +154,7 @@ class Odometer(Interaction):
     def initial_state(self, bodies):
         return {"distance": np.zeros(len(bodies))}
 
-    def advance_state(self, part, start_bodies, end_bodies, dt):
+    def advance_state(self, part, start_bodies, end_bodies, end_contacts, dt):
         travelled = [np.linalg.norm(b.position - a.position) for a, b in zip(start_bodies, end_bodies)]
         return {"distance": part["distance"] + travelled}
 

@@ -7,6 +7,7 @@ import warpbem as wb
 from warpbem.surfaces import quad9
 from warpbem.surfaces.gaps import WALL, GapFinder
 from warpbem.surfaces.placement import signed_distance
+from warpbem.dynamics.implicit import ImplicitSystem
 from warpbem.forces.repulsion import Repulsion
 
 
@@ -37,23 +38,40 @@ def test_repulsion_rejects_bad_parameters():
         Repulsion(coefficient=-1.0)
     with pytest.raises(ValueError, match="wall_roughness"):
         Repulsion(wall_roughness=float("nan"))
-    with pytest.raises(ValueError, match="already touch"):
-        Repulsion().implicit_forces([-1e-9], [0.0], [[1.0]], 1e-3)
+    energy, force, stiffness = Repulsion().law(np.array([-1e-9, 0.0]))
+    assert np.all(np.isinf(energy))  # touching layers: outside the law, a barrier for the step
 
 
-def test_implicit_forces_solve_the_backward_euler_equation():
-    """eps' = eps + dt (rate + B F(eps')) for two coupled contacts; for dt -> infinity the
-    separations go to where the repulsion cancels the approach, rate + B F = 0."""
+def test_law_is_the_potential_its_force_and_stiffness():
+    """F = -dU/d eps and k = dF/d(-eps) = d^2U/d eps^2 > 0 (convex: the joint backward-Euler
+    step of dynamics/implicit.py minimises a convex function), by central differences."""
+    rep = Repulsion()
+    eps = np.array([2e-9, 10e-9, 30e-9])
+    h = 1e-13
+    energy, force, stiffness = rep.law(eps)
+    up, down = rep.law(eps + h), rep.law(eps - h)
+    np.testing.assert_allclose(force, -(up[0] - down[0]) / (2 * h), rtol=1e-5)
+    np.testing.assert_allclose(stiffness, -(up[1] - down[1]) / (2 * h), rtol=1e-5)
+    assert np.all(stiffness > 0)
+
+
+def test_joint_step_solves_the_backward_euler_equation():
+    """eps' = eps + dt (rate + B F(eps')) for two coupled contacts (basis: a unit force along each,
+    Q = R = B); for dt -> infinity the separations go to where the repulsion cancels the
+    approach, rate + B F = 0 (as far as the round-off of eps + dt rate lets it)."""
     rep = Repulsion()
     eps, rate = np.array([20e-9, 15e-9]), np.array([-3e-6, -1e-6])
     response = np.array([[4e6, 1e6], [1e6, 2e6]])  # m/(N s)
+    system = ImplicitSystem(eps, rate, response, response, [(slice(0, 2), rep.law)])
     for dt in (1e-5, 1e-3, 1e-1):
-        force, end = rep.implicit_forces(eps, rate, response, dt)
+        z, force = system.solve(dt, [])
+        end = system.end_values(z, dt)
         np.testing.assert_allclose(end, eps + dt * (rate + response @ force), rtol=0, atol=1e-18)
-        np.testing.assert_allclose(force, rep.force(end), rtol=1e-12)
+        np.testing.assert_allclose(force, rep.force(end), rtol=1e-10)
         assert np.all(end > 0)
-    force, _ = rep.implicit_forces(eps, rate, response, 1e6)
-    np.testing.assert_allclose(rate + response @ force, 0.0, atol=1e-7 * np.abs(rate).max())
+    # a step 1e3 s long: |eps' - eps| / dt < 2e-8 m / 1e3 s, 1e-5 of the rate
+    z, force = system.solve(1e3, [])
+    np.testing.assert_allclose(rate + response @ force, 0.0, atol=1e-5 * np.abs(rate).max())
 
 
 @pytest.fixture(scope="module")

@@ -46,6 +46,8 @@ def frame_columns(model) -> dict[str, Column]:
         columns[f"{x.name}_torque"] = Column("N m", (n, 3), f"its torque about each reference point, {AT_STATE}")
         for name, (unit, shape) in x.state_columns().items():
             columns[f"{x.name}_{name}"] = Column(unit, tuple(shape), f"state of the {x.name} interaction")
+        for name, (unit, shape, description) in x.derived_columns().items():
+            columns[name] = Column(unit, tuple(shape), description)
     return columns
 
 
@@ -67,6 +69,7 @@ class Frame:
     closest_gap: float
     loads: dict
     parts: dict
+    derived: dict
 
     def columns(self) -> dict[str, np.ndarray]:
         row = {"time": self.time, "dt": self.dt, "steps": self.steps, "position": self.positions,
@@ -78,4 +81,5 @@ class Frame:
             row[f"{name}_force"], row[f"{name}_torque"] = loads.force, loads.torque
         for name, part in self.parts.items():
             row.update({f"{name}_{column}": value for column, value in part.items()})
+        row.update(self.derived)
         return row

@@ -46,6 +46,11 @@ class SolverOptions:
     dtype: str = "float64"
     operator: str = "auto"
     max_iterations: int = 600
+    reuse_tolerance: float = 0.0  # m: 0 solves every state; > 0 reuses snapshots (hydrodynamics.py)
+
+    def __post_init__(self):
+        if not (np.isfinite(self.reuse_tolerance) and self.reuse_tolerance >= 0):
+            raise ValueError(f"reuse_tolerance must be >= 0 (m), got {self.reuse_tolerance!r}")
 
     def build(self, flow: Flow, device) -> MobilitySolver:
         return MobilitySolver(flow.shear_rate, flow.viscosity, flow.wall, device,
@@ -118,9 +123,6 @@ class Model:
         seen = [x.name for x in interactions]
         if len(set(seen)) != len(seen):
             raise ValueError(f"interaction names must be unique, got {seen}")
-        if sum(x.implicit for x in interactions) > 1:
-            # one backward-Euler solve per step; coupling several stiff laws needs a joint solve
-            raise ValueError(f"at most one implicit interaction, got {[x.name for x in interactions if x.implicit]}")
         for name, value in (("meshes", meshes), ("fixed", fixed), ("names", names), ("interactions", interactions)):
             object.__setattr__(self, name, value)
 
@@ -143,8 +145,9 @@ class Model:
         return next((x for x in self.interactions if x.name == name), None)
 
     @property
-    def implicit(self) -> Interaction | None:
-        return next((x for x in self.interactions if x.implicit), None)
+    def implicit(self) -> tuple:
+        """The implicit interactions, solved together in every step (``dynamics/implicit.py``)."""
+        return tuple(x for x in self.interactions if x.implicit)
 
     def bodies(self, state: State) -> list[Body]:
         if len(state.positions) != self.n_bodies:

@@ -2,13 +2,16 @@
 
     geometry  : the bodies of the state, placement checked
     contacts  : exact gaps, once per state, shared (surfaces.gaps.Contacts)
-    loads     : explicit interactions (gravity, given loads) -> mobility solve -> the implicit
-                interaction's coordinates (repulsion: contacts within reach) and the motion of
-                a unit force along each (one more solve each, same system, no background flow)
-    integrate : Euler or Heun; the implicit forces are those at the end of the step (backward
-                Euler, ``forces/interaction.py``); the step is dt_max far from contact and
-                shrinks with the gap, lands on the next frame time or the end, and is retried
-                at half the size when it would make bodies touch
+    loads     : explicit interactions (gravity, given loads) -> mobility (``hydrodynamics.py``:
+                exact, or from snapshots reused across steps) -> the implicit interactions'
+                coordinates (repulsion: contacts within reach; bonds) and the motion of the
+                basis their forces are combined from
+    integrate : Euler or Heun; the implicit forces are those at the end of the step, all
+                stiff laws together (backward Euler, ``implicit.py``); the step is dt_max far
+                from contact, shrinks with the gap and as the interactions ask (bond kinetics),
+                lands on the next frame time or the end, and is retried at half the size when it
+                would make bodies touch
+    state     : interactions that own state advance it over the accepted step (bond kinetics)
 
 Everything solved at a state is an ``Evaluation``; the end state's evaluation gives its frame
 and is also the first stage of the next step, so writing a frame costs no extra solve.
@@ -22,26 +25,25 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..forces.interaction import ImplicitCoordinates, Loads
-from ..hydro.mobility import MobilitySolution
 from ..surfaces.gaps import Contacts, GapFinder
 from ..surfaces.placement import PlacementError, check_placement
 from . import integrate
 from .frame import Frame
+from .hydrodynamics import Hydrodynamics, HydrodynamicSolves
+from .implicit import ImplicitSolveError, ImplicitSystem
 from .model import Model
 from .state import State
 
-PROBE_FORCE = 1e-12  # N: the unit load of an implicit coordinate's solve (the response is linear)
-
-
 @dataclass(frozen=True)
 class Implicit:
-    """The implicit interaction at a state: its coordinates, the solves of a probe force along
-    each, the coordinates' rates without it (m/s) and their response to 1 N along each (m/(N s))."""
+    """The implicit interactions at a state: their coordinates (concatenated; ``owners``: which
+    interaction each slice belongs to), the forces at the state and the backward-Euler system."""
 
     coordinates: ImplicitCoordinates
-    responses: list  # MobilitySolution per coordinate, for PROBE_FORCE along it
-    rates: np.ndarray
-    response: np.ndarray
+    owners: list  # [(interaction, slice)]
+    system: ImplicitSystem
+    at_state: np.ndarray  # N: the laws at the state's own coordinates
+    at_state_coefficients: np.ndarray  # N: the same forces in the basis of the solves
 
 
 @dataclass(frozen=True)
@@ -53,49 +55,45 @@ class Evaluation:
     contacts: Contacts
     planned_dt: float  # s: the step the policy allows from here (an upper bound for retries)
     explicit: dict  # {interaction name: Loads}
-    background: MobilitySolution  # flow and explicit loads
+    hydro: Hydrodynamics
     implicit: Implicit | None
 
     def motion(self, dt: float):
         """(U, Omega) over a step of dt from here: the implicit forces of the step's end."""
+        b = self.hydro.background
         if self.implicit is None:
-            return self.background.velocity, self.background.angular_velocity
-        x = self.implicit
-        magnitudes = self.model.implicit.implicit_magnitudes(x.coordinates, x.rates, x.response, dt)
-        return self._with(magnitudes)[:2]
-
-    def _with(self, magnitudes):
-        """Velocities and loads with the implicit forces ``magnitudes`` (N) added (linearity)."""
-        b = self.background
-        velocity, angular_velocity = b.velocity.copy(), b.angular_velocity.copy()
-        force, torque = b.force.copy(), b.torque.copy()
-        for f, r in zip(magnitudes, self.implicit.responses):
-            scale = f / PROBE_FORCE
-            velocity += scale * r.velocity
-            angular_velocity += scale * r.angular_velocity
-            force += scale * r.force
-            torque += scale * r.torque
-        # a held body is also held against the implicit force it receives itself
-        received = self.implicit.coordinates.loads(magnitudes, self.model.fixed_mask)
-        return velocity, angular_velocity, force - received.force, torque - received.torque
+            return b.velocity, b.angular_velocity
+        at_state = self.implicit.at_state_coefficients
+        z, _ = self.implicit.system.solve(dt, [at_state * 2.0**k for k in range(48)])
+        velocity, angular_velocity, _, _ = self.hydro.basis.combine(z)
+        return b.velocity + velocity, b.angular_velocity + angular_velocity
 
     def frame(self, dt: float) -> Frame:
         """The record of this state; ``dt`` (s): the step that led here."""
-        b = self.background
+        b = self.hydro.background
         velocity, angular_velocity, force, torque = b.velocity, b.angular_velocity, b.force, b.torque
         zero = Loads.zero(self.model.n_bodies)
         loads = {x.name: self.explicit.get(x.name, zero) for x in self.model.interactions}
         iterations, residual = b.iterations, b.residual
-        implicit = self.model.implicit
         if self.implicit is not None:
-            at_state = implicit.magnitudes_at(self.implicit.coordinates)
-            velocity, angular_velocity, force, torque = self._with(at_state)
-            loads[implicit.name] = self.implicit.coordinates.loads(at_state)
-            iterations += sum(r.iterations for r in self.implicit.responses)
-            residual = max([residual] + [r.residual for r in self.implicit.responses])
+            x = self.implicit
+            extra = self.hydro.basis.combine(x.at_state_coefficients)
+            # a held body is also held against the implicit forces it receives itself
+            received = x.coordinates.loads(x.at_state, self.model.fixed_mask)
+            velocity, angular_velocity = velocity + extra[0], angular_velocity + extra[1]
+            force, torque = force + extra[2] - received.force, torque + extra[3] - received.torque
+            for interaction, where in x.owners:
+                loads[interaction.name] = x.coordinates.part(where).loads(x.at_state[where])
+        if self.hydro.basis is not None:
+            iterations += self.hydro.basis.iterations
+            residual = max(residual, self.hydro.basis.residual)
         s = self.state
+        derived = {}
+        for interaction in self.model.interactions:
+            if interaction.name in s.parts:
+                derived.update(interaction.derived_values(s.parts[interaction.name]))
         return Frame(s.time, dt, s.steps, s.positions, s.orientations, velocity, angular_velocity, force, torque,
-                     iterations, residual, self.contacts.closest(), loads, s.parts)
+                     iterations, residual, self.contacts.closest(), loads, s.parts, derived)
 
 
 class Simulator:
@@ -109,44 +107,65 @@ class Simulator:
     def __init__(self, model: Model, device="cpu"):
         self.model = model
         self.solver = model.solver.build(model.flow, device)
+        self.hydro = HydrodynamicSolves(model, self.solver)
         self.gaps = GapFinder(device)
         self._latest: Evaluation | None = None
 
-    def evaluate(self, state: State, dt_plan: float | None = None) -> Evaluation:
+    def evaluate(self, state: State, dt_plan: float | None = None, geometry=None) -> Evaluation:
         """Geometry, contacts, loads and mobility at ``state``; ``dt_plan``: the step about to be
-        taken from it (default: what the policy allows at its gaps)."""
+        taken from it (default: what the policy and the interactions allow there);
+        ``geometry``: its (bodies, contacts) when the caller has them already."""
         if self._latest is not None and self._latest.state is state and dt_plan is None:
             return self._latest
         model = self.model
-        bodies = model.bodies(state)  # geometry
-        check_placement(bodies, model.flow.wall)
-        contacts = Contacts(bodies, model.outer_radii, model.flow.wall, self.gaps)  # gaps, once per state
+        bodies, contacts = self.geometry(state) if geometry is None else geometry
         if dt_plan is None:
             dt_plan = model.policy.dt(contacts.smallest(model.policy.contact_gap))
+            limits = [x.longest_step(bodies, contacts, state.parts.get(x.name)) for x in model.interactions]
+            dt_plan = max(model.policy.dt_min, min([dt_plan] + limits))
         explicit = {x.name: loads for x in model.interactions
                     if (loads := x.explicit_loads(bodies, contacts)) is not None}
         total = sum(explicit.values(), Loads.zero(model.n_bodies))
-        background = self.solver.solve(bodies, forces=total.force, torques=total.torque, check_placement_first=False)
-        implicit = self._implicit(bodies, contacts, background, dt_plan)
-        self._latest = Evaluation(model, state, contacts, dt_plan, explicit, background, implicit)
+        background, snapshot = self.hydro.background(bodies, total)
+        hydro, implicit = self._implicit(state, bodies, contacts, background, snapshot, dt_plan)
+        self._latest = Evaluation(model, state, contacts, dt_plan, explicit, hydro, implicit)
         return self._latest
 
-    def _implicit(self, bodies, contacts, background, dt_plan) -> Implicit | None:
-        """The implicit interaction's coordinates at this state and the solves of a probe force
-        along each (the same system as ``background``, no background flow)."""
-        model = self.model
-        coordinates = None if model.implicit is None else model.implicit.implicit_coordinates(
-            bodies, contacts, background.velocity, background.angular_velocity, dt_plan)
-        if coordinates is None:
-            return None
-        free = ~model.fixed_mask[:, None]
-        responses = [self.solver.solve(bodies, forces=PROBE_FORCE * f * free, torques=PROBE_FORCE * t * free,
-                                       check_placement_first=False, background=False)
-                     for f, t in zip(coordinates.unit_force, coordinates.unit_torque)]
-        matrix = np.array([coordinates.rates(r.velocity, r.angular_velocity) for r in responses]).T / PROBE_FORCE
+    def geometry(self, state: State):
+        """The bodies of a state, placement checked, and its Contacts (gaps, once per state)."""
+        bodies = self.model.bodies(state)
+        check_placement(bodies, self.model.flow.wall)
+        return bodies, Contacts(bodies, self.model.outer_radii, self.model.flow.wall, self.gaps)
+
+    def _implicit(self, state, bodies, contacts, background, snapshot, dt_plan):
+        """The implicit interactions' coordinates at this state, joined, with the solves of the
+        basis their forces are combined from and the backward-Euler system of a step."""
+        found = []
+        for x in self.model.implicit:
+            c = x.implicit_coordinates(bodies, contacts, state.parts.get(x.name), background.velocity,
+                                       background.angular_velocity, dt_plan)
+            if c is not None and len(c.values):
+                found.append((x, c))
+        if not found:
+            return Hydrodynamics(background, None, "none"), None
+        owners, start = [], 0
+        for x, c in found:
+            owners.append((x, slice(start, start + len(c.values))))
+            start += len(c.values)
+        coordinates = ImplicitCoordinates.join([c for _, c in found])
+        basis, kind = self.hydro.basis(bodies, coordinates, snapshot)
+        rate_response = np.array([coordinates.rates(u, w) for u, w in zip(basis.velocity, basis.angular_velocity)]).T
         rates = coordinates.rates(background.velocity, background.angular_velocity)
-        # symmetric by reciprocity: averaging removes the GMRES noise
-        return Implicit(coordinates, responses, rates, 0.5 * (matrix + matrix.T))
+        system = ImplicitSystem(coordinates.values, rates, rate_response, basis.quadratic(),
+                                [(where, x.law) for x, where in owners])
+        at_state = system.evaluate(coordinates.values)[1]
+        if kind == "coordinates":
+            coefficients = at_state
+        else:
+            loads = coordinates.loads(at_state, ~self.model.fixed_mask)
+            coefficients = self.hydro.body_coefficients(loads.force, loads.torque)
+        return (Hydrodynamics(background, basis, kind),
+                Implicit(coordinates, owners, system, at_state, coefficients))
 
     def frame(self, state: State) -> Frame:
         """The frame of a state no step led to (the first of a run)."""
@@ -162,7 +181,7 @@ class Simulator:
             try:
                 end = self._integrate(start, dt, t_stop if dt == t_stop - state.time else None)
                 return end.state, end.frame(dt)
-            except PlacementError as err:
+            except (PlacementError, ImplicitSolveError) as err:
                 if dt <= self.model.policy.dt_min * (1 + 1e-12):
                     raise PlacementError(f"at t = {state.time:.6g} s even the smallest step dt_min ="
                                          f" {self.model.policy.dt_min:g} s makes bodies touch: {err}") from err
@@ -177,13 +196,13 @@ class Simulator:
             return start.motion(dt) if s is state else self.evaluate(s, dt).motion(dt)
 
         moved, _ = integrate.step(state, motion, dt, self.model.scheme)
-        parts = {}
+        moved = replace(moved, time=moved.time if landing is None else landing, steps=state.steps + 1)
+        geometry = self.geometry(moved)
         if state.parts:  # interactions that own state advance it over the accepted motion
-            end_bodies = self.model.bodies(moved)
-            parts = {x.name: x.advance_state(state.parts[x.name], start.contacts.bodies, end_bodies, dt)
+            parts = {x.name: x.advance_state(state.parts[x.name], start.contacts.bodies, *geometry, dt)
                      for x in self.model.interactions if x.name in state.parts}
-        moved = replace(moved, time=moved.time if landing is None else landing, steps=state.steps + 1, parts=parts)
-        return self.evaluate(moved)
+            moved = replace(moved, parts=parts)
+        return self.evaluate(moved, geometry=geometry)
 
     def run(self, state: State, t_end: float, callback=None) -> State:
         """Step until t_end (landing on it); ``callback(state, frame)`` after each step."""

@@ -7,24 +7,26 @@ An interaction is given the bodies of a state (``surfaces.Body``, SI) and that s
 
 * **explicit**: ``explicit_loads`` returns the force and torque it puts on each body (gravity,
   given loads); the step adds them to the loads of the mobility solve;
-* **implicit** (stiff laws: repulsion, later bond springs): ``implicit_coordinates`` returns
-  scalar coordinates s_c (a separation, an extension; m) and the loads of a unit force along
-  each. The step solves the motion caused by each unit force (the mobility is linear), and the
-  interaction's ``implicit_magnitudes`` takes the forces at the end of the step (backward Euler):
+* **implicit** (stiff laws: repulsion, bond springs): ``implicit_coordinates`` returns scalar
+  coordinates s_c (a separation, a bond length; m) and the loads of a unit force along each;
+  ``law(s)`` gives each coordinate's convex energy U (J), its force f = -dU/ds (N, along the
+  unit load) and stiffness dU^2/ds^2 (N/m). The step takes the forces of every implicit
+  interaction together at the end of the step (backward Euler, ``dynamics/implicit.py``):
 
-      s_c' = s_c + dt (r_c + sum_d B_cd f_d),   f_c = law_c(s_c'),
+      s_c' = s_c + dt (r_c + sum_d B_cd f_d),   f_c = f(s_c'),
 
-  with r the rates of the coordinates without the interaction and B the response of the rates
-  to unit forces (symmetric by reciprocity). By virtual work the rate of a coordinate under
-  rigid motions (U_b, Omega_b) is sum_b unit_force_cb . U_b + unit_torque_cb . Omega_b, so the
-  same unit loads give both. ``magnitudes_at`` gives the law at the state itself (the frame's
-  record of the state).
+  with r the rates of the coordinates without the stiff laws and B the response of the rates to
+  unit forces (symmetric by reciprocity). By virtual work the rate of a coordinate under rigid
+  motions (U_b, Omega_b) is sum_b unit_force_cb . U_b + unit_torque_cb . Omega_b, so the same
+  unit loads give both. The frame records the law at the state itself, f(s_c).
 
 An interaction that carries state of its own (a bond table, a counter) declares it in
 ``state_columns`` ({name: (unit, per-frame shape)}), gives its start in ``initial_state`` and
 its value after an accepted step in ``advance_state``; the step keeps it in
-``State.parts[interaction.name]``, frames write it as columns ``<name>_<column>`` and a resumed
-run reads it back.
+``State.parts[interaction.name]``, passes it back to the interaction's other methods as
+``part``, frames write it as columns ``<name>_<column>`` and a resumed run reads it back.
+Columns derived from it (``derived_columns``/``derived_values``) are written under their own
+names. ``longest_step`` bounds the step from a state (the bond kinetics: k dt << 1).
 """
 
 from __future__ import annotations
@@ -63,6 +65,14 @@ class ImplicitCoordinates:
         return (np.einsum("cbi,bi->c", self.unit_force, velocity)
                 + np.einsum("cbi,bi->c", self.unit_torque, angular_velocity))
 
+    def part(self, where: slice) -> "ImplicitCoordinates":
+        return ImplicitCoordinates(self.values[where], self.unit_force[where], self.unit_torque[where])
+
+    @classmethod
+    def join(cls, items) -> "ImplicitCoordinates":
+        return cls(*(np.concatenate([getattr(x, name) for x in items])
+                     for name in ("values", "unit_force", "unit_torque")))
+
     def loads(self, magnitudes: np.ndarray, bodies_mask: np.ndarray | None = None) -> Loads:
         """Loads of the forces ``magnitudes`` (N) along the coordinates, on the bodies of
         ``bodies_mask`` only (all if None)."""
@@ -85,16 +95,20 @@ class Interaction:
     def explicit_loads(self, bodies, contacts) -> Loads | None:
         return None
 
-    def implicit_coordinates(self, bodies, contacts, velocity, angular_velocity, dt) -> ImplicitCoordinates | None:
+    def implicit_coordinates(self, bodies, contacts, part, velocity, angular_velocity,
+                             dt) -> ImplicitCoordinates | None:
         """Coordinates that can matter over a step of at most ``dt`` (s) from this state, given the
-        bodies' motion without this interaction (m/s, rad/s); None if there are none."""
+        bodies' motion without the stiff laws (m/s, rad/s); None if there are none."""
         return None
 
-    def implicit_magnitudes(self, coordinates: ImplicitCoordinates, rates, response, dt) -> np.ndarray:
+    def law(self, s: np.ndarray):
+        """(energy J, force N, stiffness N/m) of coordinates at values s (m); energy +inf where
+        the law is not defined (layers that touch)."""
         raise NotImplementedError(f"{type(self).__name__} is not an implicit interaction")
 
-    def magnitudes_at(self, coordinates: ImplicitCoordinates) -> np.ndarray:
-        raise NotImplementedError(f"{type(self).__name__} is not an implicit interaction")
+    def longest_step(self, bodies, contacts, part) -> float:
+        """The longest step (s) this interaction allows from this state."""
+        return np.inf
 
     def state_columns(self) -> dict:
         return {}
@@ -102,5 +116,12 @@ class Interaction:
     def initial_state(self, bodies) -> dict:
         return {}
 
-    def advance_state(self, part: dict, start_bodies, end_bodies, dt: float) -> dict:
+    def advance_state(self, part: dict, start_bodies, end_bodies, end_contacts, dt: float) -> dict:
         return part
+
+    def derived_columns(self) -> dict:
+        """{column name: (unit, per-frame shape, description)} computed from ``part``."""
+        return {}
+
+    def derived_values(self, part: dict) -> dict:
+        return {}

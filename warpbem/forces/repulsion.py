@@ -22,11 +22,13 @@ feel its torque; for the wall it acts along the wall normal.
 
 Stiffness. The force changes e-fold over 1/tau = 0.5 nm; with the squeeze mobility of a 5 um
 cell 0.25 um from a surface an explicit step would have to stay below ~1e-5 s (the seed's
-limit). ``implicit_forces`` instead takes the contact forces at the end of the step (backward
-Euler for the separations, with the exact contact mobilities from the BEM solver), which is
-stable for any step and keeps eps > 0. As an interaction (``forces/interaction.py``) its
-coordinates are the separations of the contacts within reach, each with the unit loads of a
-repulsive force along the contact normal, applied at the closest points.
+limit). The step instead takes the contact forces at the end of the step (backward Euler for
+the separations, with the exact contact mobilities from the BEM solver, jointly with any other
+stiff law: ``dynamics/implicit.py``), which is stable for any step and keeps eps > 0, since the
+energy U is a barrier: +inf once the layers touch. As an interaction
+(``forces/interaction.py``) its coordinates are the separations of the contacts within reach,
+each with the unit loads of a repulsive force along the contact normal, applied at the closest
+points.
 """
 
 from __future__ import annotations
@@ -77,7 +79,8 @@ class Repulsion(Interaction):
     def slope(self, eps):
         """dF/d eps in N/m (negative)."""
         x = self.inverse_length * np.asarray(eps, dtype=float)
-        return -self.coefficient * self.inverse_length**2 * np.exp(x) / np.expm1(x) ** 2
+        with np.errstate(over="ignore"):  # far contacts: sinh overflows to inf, the slope to -0
+            return -self.coefficient * self.inverse_length**2 / (4.0 * np.sinh(0.5 * x) ** 2)
 
     def potential(self, eps):
         """U(eps) = -F0 ln(1 - exp(-tau eps)) in J."""
@@ -92,54 +95,15 @@ class Repulsion(Interaction):
         """The separation at which the force equals ``load`` (N): ln(1 + F0 tau / load) / tau."""
         return np.log1p(self.coefficient * self.inverse_length / load) / self.inverse_length
 
-    def implicit_forces(self, eps, rate, response, dt, tolerance=1e-10, max_iterations=200):
-        """Contact forces F = F(eps') at the end of a step of length dt (backward Euler):
+    def law(self, s):
+        """U, F and dF/d(-eps) >= 0 at separations s (m); U = +inf where the layers touch."""
+        s = np.asarray(s, dtype=float)
+        inside = s > 0
+        eps = np.where(inside, s, 1.0 / self.inverse_length)
+        energy = np.where(inside, self.potential(eps), np.inf)
+        return energy, np.where(inside, self.force(eps), 0.0), np.where(inside, -self.slope(eps), 0.0)
 
-            eps' = eps + dt (rate + response @ F(eps')),
-
-        ``rate``: d eps/dt of each contact without repulsion (m/s); ``response[c, d]``: d eps_c/dt
-        per newton of force at contact d (m/(N s); symmetric positive semi-definite by the
-        reciprocal theorem). Returns (F in N, eps' in m).
-
-        Newton's method in w = ln F, where eps'(w) = ln(1 + F0 tau e^-w) / tau is smooth and the
-        stiff exponential of eq. 3.1 becomes the mild e^w of the mobility term; steps are scaled
-        to change F by at most a factor e^4 and backtracked on the residual, so it converges from any start.
-        """
-        eps = np.asarray(eps, dtype=float)
-        rate = np.asarray(rate, dtype=float)
-        response = np.asarray(response, dtype=float).reshape(len(eps), len(eps))
-        if np.any(eps <= 0):
-            raise ValueError(f"roughness layers already touch (separations {eps.tolist()} m)")
-        f0_tau = self.coefficient * self.inverse_length
-
-        def residual(w):
-            return np.log1p(f0_tau * np.exp(-w)) / self.inverse_length - eps - dt * (rate + response @ np.exp(w))
-
-        w = np.log(np.maximum(self.force(eps), 1e-300))
-        r = residual(w)
-        for _ in range(max_iterations):
-            force = np.exp(w)
-            rounding = 1e-14 * (eps + dt * (np.abs(rate) + np.abs(response) @ force))  # cancellation
-            if np.all(np.abs(r) <= tolerance / self.inverse_length + rounding):
-                break
-            jacobian = (np.diag(-f0_tau / (force + f0_tau) / self.inverse_length)
-                        - dt * response * force[None, :])
-            step = -np.linalg.solve(jacobian, r)
-            step *= min(1.0, 4.0 / np.abs(step).max())  # scaled, not clipped: stays a descent direction
-            alpha = 1.0
-            while True:
-                trial = w + alpha * step
-                r_trial = residual(trial)
-                if np.linalg.norm(r_trial) < np.linalg.norm(r) or alpha < 1e-6:
-                    break
-                alpha *= 0.5
-            w, r = trial, r_trial
-        else:
-            raise RuntimeError(f"implicit repulsion did not converge: residual {np.abs(r).max():.3g} m")
-        force = np.exp(w)
-        return force, np.log1p(f0_tau / force) / self.inverse_length
-
-    def implicit_coordinates(self, bodies, contacts, velocity, angular_velocity, dt):
+    def implicit_coordinates(self, bodies, contacts, part, velocity, angular_velocity, dt):
         """The contacts whose separation can come within ``reach`` over a step of at most dt:
         searched out to reach + both roughness layers + twice the distance the fastest surface
         point travels in dt; a contact stays if its separation, closing at its current rate, gets
@@ -167,9 +131,3 @@ class Repulsion(Interaction):
             return None
         eps, force, torque = map(np.array, zip(*kept))
         return ImplicitCoordinates(eps, force, torque)
-
-    def implicit_magnitudes(self, coordinates, rates, response, dt):
-        return self.implicit_forces(coordinates.values, rates, response, dt)[0]
-
-    def magnitudes_at(self, coordinates):
-        return self.force(coordinates.values)

@@ -1,0 +1,101 @@
+"""The joint backward-Euler step of every stiff force law (repulsion, bond springs), DESIGN.md §4.
+
+Each implicit interaction gives coordinates s_c (a separation, a bond length; m) with a convex
+energy U_c(s) (J) whose force f_c = -U_c'(s) (N, along the coordinate's unit load) and stiffness
+k_c = U_c''(s) >= 0 (N/m) it evaluates. Over a step dt the forces are those at the end of the
+step (backward Euler):
+
+    s' = s + dt (r + R z),      with the body motion V = V0 + sum_k z_k W_k,
+
+where W_k is the motion of the k-th load of a basis (unit forces along each coordinate when they
+are fewer than the free bodies' degrees of freedom, else unit forces and torques on each free
+body), z its coefficients (N), r the coordinates' rates under V0 (the motion without the stiff
+laws) and R_ck the rate of coordinate c under W_k. The step is the minimiser of
+
+    Phi(z) = z.Q.z / 2 + sum_c U_c(s'_c) / dt,      Q_kl = (load k) . W_l  (symmetric, PSD),
+
+whose stationarity Q z = R^T f(s') says that the basis loads are the stiff forces (the
+dissipation of the motion they cause balances the work of the laws). Phi is convex, so Newton's
+method with a backtracking line search converges from any start where every U_c is finite
+(a repulsion energy is +inf once roughness layers touch): the step is stable for any dt, the
+repulsion stays positive, and stiff bonds and repulsion are solved together, however strongly
+they are coupled through one cell's mobility. The unknowns are at most 6 per free body, however
+many bonds there are.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+MAX_ITERATIONS = 200
+LENGTH_TOLERANCE = 1e-16  # m: converged when no coordinate moves by more (plus 1e-13 relative)
+
+
+class ImplicitSolveError(RuntimeError):
+    """The joint backward-Euler solve found no admissible start or did not converge."""
+
+
+@dataclass(frozen=True)
+class ImplicitSystem:
+    """values s (m,), rates r (m,) m/s, rate_response R (m, p) m/(N s), quadratic Q (p, p)
+    m/(N s) and ``laws``: [(slice of the coordinates, law)] with law(s) -> (U, f, k) arrays."""
+
+    values: np.ndarray
+    rates: np.ndarray
+    rate_response: np.ndarray
+    quadratic: np.ndarray
+    laws: list
+
+    def evaluate(self, s):
+        """Energy (J), force (N) and stiffness (N/m) of every coordinate at s."""
+        energy, force, stiffness = np.empty_like(s), np.empty_like(s), np.empty_like(s)
+        for where, law in self.laws:
+            energy[where], force[where], stiffness[where] = law(s[where])
+        return energy, force, stiffness
+
+    def end_values(self, z, dt):
+        return self.values + dt * (self.rates + self.rate_response @ z)
+
+    def objective(self, z, dt):
+        energy, force, stiffness = self.evaluate(self.end_values(z, dt))
+        return 0.5 * z @ self.quadratic @ z + np.sum(energy) / dt, force, stiffness
+
+    def _smaller_gradient(self, z, force, gradient) -> bool:
+        return np.linalg.norm(self.quadratic @ z - self.rate_response.T @ force) < 0.5 * np.linalg.norm(gradient)
+
+    def solve(self, dt: float, starts) -> tuple[np.ndarray, np.ndarray]:
+        """Coefficients z (p,) and forces f(s') (m,) of the step; ``starts``: candidate
+        coefficients tried in order after z = 0 and the loads that hold every coordinate still
+        (s' = s, admissible since the state is), until one is admissible."""
+        p = self.quadratic.shape[0]
+        still = np.linalg.lstsq(self.rate_response, -self.rates, rcond=1e-14)[0]
+        for z in [np.zeros(p), still, *starts]:
+            phi, force, stiffness = self.objective(z, dt)
+            if np.isfinite(phi):
+                break
+        else:
+            raise ImplicitSolveError("no admissible start: every candidate makes a force law diverge")
+        for _ in range(MAX_ITERATIONS):
+            gradient = self.quadratic @ z - self.rate_response.T @ force
+            hessian = self.quadratic + dt * self.rate_response.T @ (stiffness[:, None] * self.rate_response)
+            step = -np.linalg.lstsq(hessian, gradient, rcond=1e-14)[0]
+            moves = dt * np.abs(self.rate_response @ step)
+            if np.all(moves <= LENGTH_TOLERANCE + 1e-13 * np.abs(self.end_values(z, dt))):
+                z = z + step
+                return z, self.evaluate(self.end_values(z, dt))[1]
+            slope = gradient @ step
+            t = 1.0
+            while True:
+                trial = z + t * step
+                phi_trial, force_trial, stiffness_trial = self.objective(trial, dt)
+                if np.isfinite(phi_trial) and (phi_trial <= phi + 1e-4 * t * slope or self._smaller_gradient(
+                        trial, force_trial, gradient)):  # near the minimum phi is round-off, its gradient is not
+                    break
+                t *= 0.5
+                if t < 1e-12:  # no decrease of phi or its gradient along this direction: converged
+                    return z, force
+            z, phi, force, stiffness = trial, phi_trial, force_trial, stiffness_trial
+        raise ImplicitSolveError(f"the joint backward-Euler solve did not converge in {MAX_ITERATIONS} Newton"
+                                 f" steps (last coordinate change {moves.max():.3g} m)")
