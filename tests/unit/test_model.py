@@ -154,7 +154,7 @@ class Odometer(Interaction):
     def initial_state(self, bodies):
         return {"distance": np.zeros(len(bodies))}
 
-    def advance_state(self, part, start_bodies, end_bodies, end_contacts, dt):
+    def advance_state(self, part, start_bodies, end_bodies, end_contacts, dt, end_time):
         travelled = [np.linalg.norm(b.position - a.position) for a, b in zip(start_bodies, end_bodies)]
         return {"distance": part["distance"] + travelled}
 

@@ -40,7 +40,9 @@ class ImplicitSolveError(RuntimeError):
 @dataclass(frozen=True)
 class ImplicitSystem:
     """values s (m,), rates r (m,) m/s, rate_response R (m, p) m/(N s), quadratic Q (p, p)
-    m/(N s) and ``laws``: [(slice of the coordinates, law)] with law(s) -> (U, f, k) arrays."""
+    m/(N s) and ``laws``: [(slice of the coordinates, law)] with law(s) -> (U, f, k): energies
+    and forces per coordinate, and stiffnesses either per coordinate (m,) or, for laws of
+    vectors (a bond's 3 components), as 3 x 3 blocks (m / 3, 3, 3)."""
 
     values: np.ndarray
     rates: np.ndarray
@@ -49,11 +51,24 @@ class ImplicitSystem:
     laws: list
 
     def evaluate(self, s):
-        """Energy (J), force (N) and stiffness (N/m) of every coordinate at s."""
-        energy, force, stiffness = np.empty_like(s), np.empty_like(s), np.empty_like(s)
+        """Energy (J) and force (N) of every coordinate at s, and [(slice, stiffness N/m)]."""
+        energy, force, stiffness = np.empty_like(s), np.empty_like(s), []
         for where, law in self.laws:
-            energy[where], force[where], stiffness[where] = law(s[where])
+            energy[where], force[where], k = law(s[where])
+            stiffness.append((where, k))
         return energy, force, stiffness
+
+    def hessian(self, stiffness, dt):
+        """Q + dt R^T K R, K block diagonal by laws."""
+        h = self.quadratic.copy()
+        for where, k in stiffness:
+            r = self.rate_response[where]
+            if k.ndim == 1:
+                h += dt * r.T @ (k[:, None] * r)
+            else:
+                g = r.reshape(len(k), 3, -1)
+                h += dt * np.einsum("gip,gij,gjq->pq", g, k, g)
+        return h
 
     def end_values(self, z, dt):
         return self.values + dt * (self.rates + self.rate_response @ z)
@@ -79,8 +94,7 @@ class ImplicitSystem:
             raise ImplicitSolveError("no admissible start: every candidate makes a force law diverge")
         for _ in range(MAX_ITERATIONS):
             gradient = self.quadratic @ z - self.rate_response.T @ force
-            hessian = self.quadratic + dt * self.rate_response.T @ (stiffness[:, None] * self.rate_response)
-            step = -np.linalg.lstsq(hessian, gradient, rcond=1e-14)[0]
+            step = -np.linalg.lstsq(self.hessian(stiffness, dt), gradient, rcond=1e-14)[0]
             moves = dt * np.abs(self.rate_response @ step)
             if np.all(moves <= LENGTH_TOLERANCE + 1e-13 * np.abs(self.end_values(z, dt))):
                 z = z + step

@@ -109,6 +109,8 @@ class Simulator:
         self.solver = model.solver.build(model.flow, device)
         self.hydro = HydrodynamicSolves(model, self.solver)
         self.gaps = GapFinder(device)
+        for x in model.interactions:
+            x.prepare(device)
         self._latest: Evaluation | None = None
 
     def evaluate(self, state: State, dt_plan: float | None = None, geometry=None) -> Evaluation:
@@ -199,7 +201,7 @@ class Simulator:
         moved = replace(moved, time=moved.time if landing is None else landing, steps=state.steps + 1)
         geometry = self.geometry(moved)
         if state.parts:  # interactions that own state advance it over the accepted motion
-            parts = {x.name: x.advance_state(state.parts[x.name], start.contacts.bodies, *geometry, dt)
+            parts = {x.name: x.advance_state(state.parts[x.name], start.contacts.bodies, *geometry, dt, moved.time)
                      for x in self.model.interactions if x.name in state.parts}
             moved = replace(moved, parts=parts)
         return self.evaluate(moved, geometry=geometry)

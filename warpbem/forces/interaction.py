@@ -116,8 +116,11 @@ class Interaction:
     def initial_state(self, bodies) -> dict:
         return {}
 
-    def advance_state(self, part: dict, start_bodies, end_bodies, end_contacts, dt: float) -> dict:
+    def advance_state(self, part: dict, start_bodies, end_bodies, end_contacts, dt: float, end_time: float) -> dict:
         return part
+
+    def prepare(self, device) -> None:
+        """Put device data (kernels, static arrays) on ``device`` before the first step."""
 
     def derived_columns(self) -> dict:
         """{column name: (unit, per-frame shape, description)} computed from ``part``."""

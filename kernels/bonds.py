@@ -1,0 +1,183 @@
+"""Receptor-ligand bonds on the device (thesis ch. 4; Bell 1978; Hammer & Apte 1992): bond
+geometry, forces and torques reduced per cell, Monte Carlo rupture and formation, insertion
+into a per-cell bond table. Arrays in, arrays out; no Model or State objects.
+
+Layout. Receptors are microvillus tips fixed on the cells (``tips``: body-frame offsets from the
+reference point, ``receptor_body``); the receptors of adhesive body c are
+``receptor_start[c] .. receptor_start[c + 1]``, and its bond slots rows
+``c * capacity .. (c + 1) * capacity`` of the table (``bond_receptor``: -1 for a free slot,
+``bond_anchor``: the ligand's point on the wall, ``bond_birth``: time of formation). One thread
+per cell sums its own rows in row order, so the reductions are deterministic on CPU and CUDA
+alike (no float atomics).
+
+Hertz patch (thesis ch. 4.2, eq. 4.9). The cells are rigid in the mobility problem; their
+compliance enters through the contact patch: a tip at lateral distance rho from the patch
+centre (the foot of the cell's closest point to the wall) is lowered by the Hertz surface
+displacement of an elastic sphere of radius R pressed to contact radius a_s (Johnson 1985,
+Contact Mechanics, eq. 3.42), relative to a rigid approach delta = a_s^2 / R:
+
+    rho <= a_s : -rho^2 / (2 R)                       (flattened onto the patch plane)
+    rho >  a_s : u(rho) - delta,  u = [(2 a_s^2 - rho^2) asin(a_s / rho) + a_s sqrt(rho^2 - a_s^2)] / (pi R)
+
+continuous at rho = a_s and zero for a_s = 0. So the receptors inside the contact area lie on
+the flat interface and can bind, as the thesis's contact-area rule has it. A bond keeps the
+lowering of its tip at formation (``bond_offset``, m along z) for its life: its tip then moves
+rigidly with the cell, and a growing or shrinking patch never moves a bond without the cell
+moving (the implicit step sees every change of a bond's vector).
+
+Random numbers: a counter-based stream per event, ``rand_init(rand_init(seed, draw), index)``
+(PCG hashes): the same seed and counter give the same events on the same device.
+"""
+
+import functools
+import math
+from types import SimpleNamespace
+
+import warp as wp
+
+
+@functools.lru_cache(maxsize=None)
+def build_bond_kernels(dtype) -> SimpleNamespace:
+    vec3 = wp.types.vector(3, dtype)
+    mat33 = wp.types.matrix((3, 3), dtype)
+    zero, half, one = dtype(0.0), dtype(0.5), dtype(1.0)
+    pi = dtype(math.pi)
+
+    @wp.func
+    def hertz_lowering(rho: dtype, contact_radius: dtype, curvature: dtype):
+        if contact_radius <= zero:
+            return zero
+        if rho <= contact_radius:
+            return -rho * rho / (dtype(2.0) * curvature)
+        a2 = contact_radius * contact_radius
+        u = ((dtype(2.0) * a2 - rho * rho) * wp.asin(contact_radius / rho)
+             + contact_radius * wp.sqrt(rho * rho - a2)) / (pi * curvature)
+        return u - a2 / curvature
+
+    @wp.func
+    def rigid_tip(r: int, tips: wp.array(dtype=vec3), receptor_body: wp.array(dtype=int),
+                  positions: wp.array(dtype=vec3), rotations: wp.array(dtype=mat33)):
+        b = receptor_body[r]
+        return positions[b] + rotations[b] * tips[r]
+
+    @wp.func
+    def uniform(seed: int, draw: int, index: int):
+        state = wp.rand_init(wp.int32(wp.rand_init(seed, draw)), index)
+        return dtype(wp.randf(state))
+
+    @wp.kernel(enable_backward=False)
+    def bond_geometry(bond_receptor: wp.array(dtype=int), bond_anchor: wp.array(dtype=vec3),
+                      bond_offset: wp.array(dtype=dtype), tips: wp.array(dtype=vec3),
+                      receptor_body: wp.array(dtype=int), positions: wp.array(dtype=vec3),
+                      rotations: wp.array(dtype=mat33),
+                      vector: wp.array(dtype=vec3), moment: wp.array(dtype=mat33)):
+        """Per row: the bond vector x_m - x_o from anchor to tip (m; eq. 4.3 has its opposite,
+        the direction of the tension) and the moment arm x_m - x_c as the matrix [arm]_x with
+        [arm]_x e = arm x e (eq. 4.4 about the reference point x_c)."""
+        row = wp.tid()
+        r = bond_receptor[row]
+        if r < 0:
+            vector[row] = vec3()
+            moment[row] = mat33()
+            return
+        tip = rigid_tip(r, tips, receptor_body, positions, rotations) + vec3(zero, zero, bond_offset[row])
+        vector[row] = tip - bond_anchor[row]
+        arm = tip - positions[receptor_body[r]]
+        moment[row] = wp.skew(arm)
+
+    @wp.kernel(enable_backward=False)
+    def reduce_per_cell(bond_receptor: wp.array(dtype=int), moment: wp.array(dtype=mat33),
+                        bond_force: wp.array(dtype=vec3), capacity: int,
+                        force: wp.array(dtype=vec3), torque: wp.array(dtype=vec3), count: wp.array(dtype=int)):
+        """Force (N), torque (N m) and number of the bonds of each adhesive cell from each row's
+        force on its tip (one thread per cell, rows in order)."""
+        c = wp.tid()
+        f = vec3()
+        t = vec3()
+        n = int(0)
+        for row in range(c * capacity, (c + 1) * capacity):
+            if bond_receptor[row] >= 0:
+                f = f + bond_force[row]
+                t = t + moment[row] * bond_force[row]
+                n += 1
+        force[c] = f
+        torque[c] = t
+        count[c] = n
+
+    @wp.kernel(enable_backward=False)
+    def rupture(bond_receptor: wp.array(dtype=int), vector: wp.array(dtype=vec3), spring: dtype, rest: dtype,
+                compression: int, off_rate: dtype, compliance_per_kt: dtype, dt: dtype, seed: int, draw: int,
+                broken: wp.array(dtype=int)):
+        """Bell rupture (eq. 4.1): k_r = k_r0 exp(r0 |F| / kT), F = sigma (L - lambda) (a slack bond
+        carries no force when bonds resist tension only); broken with 1 - exp(-k_r dt)."""
+        row = wp.tid()
+        broken[row] = 0
+        if bond_receptor[row] < 0:
+            return
+        f = spring * (wp.length(vector[row]) - rest)
+        if compression == 0:
+            f = wp.max(f, zero)
+        rate = off_rate * wp.exp(compliance_per_kt * wp.abs(f))
+        if uniform(seed, draw, row) < one - wp.exp(-rate * dt):
+            broken[row] = 1
+            bond_receptor[row] = -1
+
+    @wp.kernel(enable_backward=False)
+    def formation(bound: wp.array(dtype=int), tips: wp.array(dtype=vec3), receptor_body: wp.array(dtype=int),
+                  positions: wp.array(dtype=vec3), rotations: wp.array(dtype=mat33),
+                  patch_centre: wp.array(dtype=vec3), patch_radius: wp.array(dtype=dtype),
+                  curvature: wp.array(dtype=dtype), rest: dtype, layer: dtype, spring_per_kt: dtype,
+                  compliance: dtype, on_rate: dtype, dt: dtype, seed: int, draw: int,
+                  candidate: wp.array(dtype=int), anchor: wp.array(dtype=vec3), offset: wp.array(dtype=dtype)):
+        """Formation (eq. 4.2): k_f = k_f0 exp(sigma |d| (r0 - |d| / 2) / kT), d the deviation from
+        the rest length of the best ligand within reach. Ligands in excess fill the substrate
+        layer 0 <= z <= ``layer`` (its roughness), so a tip at height z finds one straight below
+        at z - lambda, clamped to the layer; formed with 1 - exp(-k_f dt)."""
+        r = wp.tid()
+        candidate[r] = 0
+        if bound[r] != 0:
+            return
+        b = receptor_body[r]
+        tip = rigid_tip(r, tips, receptor_body, positions, rotations)
+        c = patch_centre[b]
+        rho = wp.sqrt((tip[0] - c[0]) * (tip[0] - c[0]) + (tip[1] - c[1]) * (tip[1] - c[1]))
+        lowering = hertz_lowering(rho, patch_radius[b], curvature[b])
+        tip = tip + vec3(zero, zero, lowering)
+        height = wp.clamp(tip[2] - rest, zero, layer)
+        d = wp.abs(tip[2] - height - rest)
+        rate = on_rate * wp.exp(spring_per_kt * d * (compliance - half * d))
+        if uniform(seed, draw, r) < one - wp.exp(-rate * dt):
+            candidate[r] = 1
+            anchor[r] = vec3(tip[0], tip[1], height)
+            offset[r] = lowering
+
+    @wp.kernel(enable_backward=False)
+    def insert(candidate: wp.array(dtype=int), anchor: wp.array(dtype=vec3), offset: wp.array(dtype=dtype),
+               receptor_start: wp.array(dtype=int), capacity: int, time: dtype,
+               bond_receptor: wp.array(dtype=int), bond_anchor: wp.array(dtype=vec3),
+               bond_offset: wp.array(dtype=dtype), bond_birth: wp.array(dtype=dtype), bound: wp.array(dtype=int)):
+        """New bonds into each cell's free rows, receptors in index order, up to ``capacity``
+        bonds per cell (the cap of thesis figs. 4.12-4.14: the rest are refused)."""
+        c = wp.tid()
+        row = c * capacity
+        end = (c + 1) * capacity
+        for r in range(receptor_start[c], receptor_start[c + 1]):
+            if candidate[r] != 0:
+                while row < end and bond_receptor[row] >= 0:
+                    row += 1
+                if row < end:
+                    bond_receptor[row] = r
+                    bond_anchor[row] = anchor[r]
+                    bond_offset[row] = offset[r]
+                    bond_birth[row] = time
+                    bound[r] = 1
+
+    @wp.kernel(enable_backward=False)
+    def mark_bound(bond_receptor: wp.array(dtype=int), bound: wp.array(dtype=int)):
+        row = wp.tid()
+        r = bond_receptor[row]
+        if r >= 0:
+            bound[r] = 1
+
+    return SimpleNamespace(vec3=vec3, mat33=mat33, bond_geometry=bond_geometry, reduce_per_cell=reduce_per_cell,
+                           rupture=rupture, formation=formation, insert=insert, mark_bound=mark_bound)

@@ -1,0 +1,346 @@
+"""Receptor-ligand adhesion (thesis ch. 4): Hookean bonds (eq. 4.3, 4.4) with Bell kinetics
+(eq. 4.1, 4.2) by Monte Carlo, and the Hertz contact patch (eq. 4.8, 4.9). The device code is
+``kernels/bonds.py``; this module holds the parameters, the receptors and the protocol.
+
+Model, written down (SI):
+
+* Receptors sit at microvillus tips, ``roughness`` (175 nm, Table 4.1) out along the outward
+  normal from the surface of each adhesive free cell, placed uniformly by area with density
+  ``receptor_density`` (1/m^2) from the seed (a 5 um cell at 20 /um^2 has 6283).
+* Ligands are in excess in the substrate layer 0 <= z <= ``ligand_layer`` (its roughness, 50 nm):
+  a free receptor whose tip is at height z binds to one straight below at z - lambda, clamped
+  to the layer, so the bond forms at its rest length lambda wherever the tip is within
+  lambda .. lambda + layer of the wall, and stretched or compressed by the distance beyond.
+  With a finite ``ligand_density`` n_l the on-rate is scaled by min(1, n_l / n_r) (mean field:
+  the share of receptors facing a free ligand).
+* Formation: k_f = k_f0 exp(sigma |d| (r0 - |d|/2) / kT) (eq. 4.2; d the deviation from lambda);
+  rupture: k_r = k_r0 exp(r0 |F| / kT) (eq. 4.1), F = sigma (L - lambda) (only tension when
+  ``compression`` is false: a compressed bond is slack); each with probability 1 - exp(-k dt),
+  drawn after each accepted step at its end configuration. Note k_f / k_r = (k_f0 / k_r0)
+  exp(-sigma d^2 / 2kT): the rates obey detailed balance, so a stiff bond forms only within
+  sqrt(2 kT / sigma) of its rest length (0.3 nm at 100 dyn/cm, 4 nm at 0.5 dyn/cm).
+* Forces: the bond springs are an implicit interaction (coordinates: bond lengths, energy
+  sigma (L - lambda)^2 / 2), solved with the repulsion at the end of each step
+  (``dynamics/implicit.py``), so the step is set by the kinetics, k dt <= ``kinetics_fraction``
+  (``longest_step``), not by the spring stiffness.
+* Contact (ch. 4.2): after each step the normal component of the cell's bond forces,
+  F = max(0, -sum F_z), gives the Hertz contact radius a_s = (3 F a / (4 E*))^(1/3), E* =
+  E / (1 - nu^2), E = 2 G (1 + nu) (eq. 4.9; a the cell's equivalent radius); tips within the
+  patch are flattened onto it (``kernels/bonds.py``), so the receptors inside the contact area
+  are those within reach. Before any bond has formed a_s = 0 and the receptors within reach are
+  those of the cap that comes within lambda + layer of the wall (the thesis's first-step
+  anchoring). Rigid cells (no shear modulus) keep a_s = 0. ``contact_traction`` gives eq. 4.8
+  for the deformation issue.
+* Cap: at most ``max_bonds`` per cell, which is also the size of each cell's bond table.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import runtime
+from ..surfaces import quad9
+from ..surfaces.gaps import WALL
+from .interaction import ImplicitCoordinates, Interaction
+
+BOLTZMANN = 1.380649e-23  # J/K
+
+
+def _positive(name, value, allow_zero=False):
+    if isinstance(value, bool) or not np.isfinite(value) or value < 0 or (value == 0 and not allow_zero):
+        bound = ">= 0" if allow_zero else "> 0"
+        raise ValueError(f"adhesion {name} must be {bound} and finite, got {value!r}")
+    return float(value)
+
+
+def hertz_contact_radius(normal_force, radius, shear_modulus, poisson_ratio):
+    """a_s = (3 F a / (4 E*))^(1/3), E* = E / (1 - nu^2), E = 2 G (1 + nu) (thesis eq. 4.9)."""
+    young = 2.0 * shear_modulus * (1.0 + poisson_ratio)
+    return np.cbrt(3.0 * np.maximum(normal_force, 0.0) * radius * (1.0 - poisson_ratio**2) / (4.0 * young))
+
+
+def contact_traction(normal_force, contact_radius):
+    """The normal traction of thesis eq. 4.8, t0 = -3 F / (2 pi a_s^2) (Pa), the Hertz pressure's
+    peak, for the traction problem of a deformable cell."""
+    return -3.0 * normal_force / (2.0 * np.pi * contact_radius**2)
+
+
+def sample_receptors(mesh, density: float, roughness: float, rng) -> np.ndarray:
+    """Tips (n, 3), body frame: points uniform by area on the QUAD9 surface (element by area,
+    then (s, t) by rejection on the surface Jacobian), moved ``roughness`` out along the normal."""
+    nodes = mesh.element_nodes()
+    areas = mesh.element_areas()
+    count = int(round(density * areas.sum()))
+    tips = np.empty((0, 3))
+    while len(tips) < count:
+        n = 2 * (count - len(tips)) + 16
+        element = rng.choice(len(areas), size=n, p=areas / areas.sum())
+        s, t = rng.uniform(-1, 1, size=(2, n))
+        values, ds, dt = quad9.shape_functions(s, t)
+        x = np.einsum("na,nai->ni", values, nodes[element])
+        normal = np.cross(np.einsum("na,nai->ni", ds, nodes[element]), np.einsum("na,nai->ni", dt, nodes[element]))
+        jacobian = np.linalg.norm(normal, axis=1)
+        bound = 1.25 * areas[element] / 4.0  # above the element's largest Jacobian on these meshes
+        keep = rng.uniform(0, 1, size=n) * bound < jacobian
+        tips = np.concatenate([tips, (x + roughness * normal / jacobian[:, None])[keep]])
+    return tips[:count]
+
+
+class Adhesion(Interaction):
+    """Bonds between the adhesive free cells and the wall (module docstring). Parameters in SI:
+    densities 1/m^2, spring_constant N/m, lengths m, rates 1/s, temperature K; per body
+    ``shear_modulus`` (Pa, None or 0: rigid, no contact patch) and ``poisson_ratio``."""
+
+    name = "bond"
+    implicit = True
+
+    def __init__(self, meshes, fixed, *, receptor_density, spring_constant, equilibrium_length, off_rate,
+                 reactive_compliance, on_rate, temperature=310.0, max_bonds=100, compression=False, seed=0,
+                 ligand_density=None, roughness=175e-9, ligand_layer=50e-9, shear_modulus=None,
+                 poisson_ratio=None, kinetics_fraction=0.1, adhesive=None):
+        n = len(meshes)
+        self.receptor_density = _positive("receptor_density", receptor_density)
+        self.ligand_density = None if ligand_density is None else _positive("ligand_density", ligand_density)
+        self.spring_constant = _positive("spring_constant", spring_constant)
+        self.equilibrium_length = _positive("equilibrium_length", equilibrium_length, allow_zero=True)
+        self.off_rate = _positive("off_rate", off_rate, allow_zero=True)
+        self.reactive_compliance = _positive("reactive_compliance", reactive_compliance, allow_zero=True)
+        self.on_rate = _positive("on_rate", on_rate, allow_zero=True)
+        self.temperature = _positive("temperature", temperature)
+        self.roughness = _positive("roughness", roughness, allow_zero=True)
+        self.ligand_layer = _positive("ligand_layer", ligand_layer, allow_zero=True)
+        self.kinetics_fraction = _positive("kinetics_fraction", kinetics_fraction)
+        if isinstance(max_bonds, bool) or int(max_bonds) != max_bonds or max_bonds < 1:
+            raise ValueError(f"adhesion max_bonds must be a positive integer, got {max_bonds!r}")
+        self.max_bonds = int(max_bonds)
+        self.compression = bool(compression)
+        if isinstance(seed, bool) or int(seed) != seed or not 0 <= seed < 2**31:
+            raise ValueError(f"adhesion seed must be an integer in [0, 2^31), got {seed!r}")
+        self.seed = int(seed)
+        fixed = np.asarray(fixed, dtype=bool)
+        adhesive = ~fixed if adhesive is None else np.asarray(adhesive, dtype=bool) & ~fixed
+        self.cells = np.flatnonzero(adhesive)  # adhesive free bodies, in body order
+        if not len(self.cells):
+            raise ValueError("adhesion needs at least one adhesive free body")
+        modulus = np.zeros(n) if shear_modulus is None else np.array(
+            [0.0 if g is None else g for g in shear_modulus], dtype=float)
+        ratio = np.full(n, 0.33) if poisson_ratio is None else np.array(
+            [0.33 if v is None else v for v in poisson_ratio], dtype=float)
+        if modulus.shape != (n,) or np.any(~np.isfinite(modulus)) or np.any(modulus < 0):
+            raise ValueError(f"shear_modulus must be >= 0 (Pa) for each of the {n} bodies, got {modulus.tolist()}")
+        if ratio.shape != (n,) or np.any(ratio <= -1) or np.any(ratio >= 0.5):
+            raise ValueError(f"poisson_ratio must be in (-1, 0.5) for each of the {n} bodies, got {ratio.tolist()}")
+        self.shear_modulus, self.poisson_ratio = modulus, ratio
+        self.radius = np.array([m.equivalent_radius() for m in meshes])
+        rng = np.random.default_rng(self.seed)
+        tips = [sample_receptors(meshes[b], self.receptor_density, self.roughness, rng) for b in self.cells]
+        self.tips = np.concatenate(tips)
+        self.receptor_body = np.concatenate([np.full(len(t), b) for t, b in zip(tips, self.cells)]).astype(np.int32)
+        self.receptor_start = np.concatenate([[0], np.cumsum([len(t) for t in tips])]).astype(np.int32)
+        self.n_bodies = n
+        self.capacity = self.max_bonds * len(self.cells)
+        self.device = None
+
+    # -- rates ------------------------------------------------------------------------------
+    @property
+    def thermal_energy(self) -> float:
+        return BOLTZMANN * self.temperature
+
+    @property
+    def effective_on_rate(self) -> float:
+        """k_f0, scaled by min(1, n_l / n_r) for a finite ligand density (1/s)."""
+        share = 1.0 if self.ligand_density is None else min(1.0, self.ligand_density / self.receptor_density)
+        return self.on_rate * share
+
+    @property
+    def fastest_formation(self) -> float:
+        """The largest k_f of eq. 4.2 (1/s), at d = r0."""
+        return self.effective_on_rate * np.exp(self.spring_constant * self.reactive_compliance**2
+                                               / (2.0 * self.thermal_energy))
+
+    def rupture_rate(self, force):
+        """k_r of eq. 4.1 for bond forces (N; tension positive)."""
+        return self.off_rate * np.exp(self.reactive_compliance * np.abs(force) / self.thermal_energy)
+
+    def formation_rate(self, deviation):
+        """k_f of eq. 4.2 for deviations from the rest length (m)."""
+        d = np.abs(deviation)
+        return self.effective_on_rate * np.exp(self.spring_constant * d * (self.reactive_compliance - 0.5 * d)
+                                               / self.thermal_energy)
+
+    def tension(self, length):
+        """Bond force sigma (L - lambda) (N, tension positive; slack bonds carry none unless
+        ``compression``)."""
+        f = self.spring_constant * (np.asarray(length, dtype=float) - self.equilibrium_length)
+        return f if self.compression else np.maximum(f, 0.0)
+
+    # -- device -----------------------------------------------------------------------------
+    def prepare(self, device):
+        wp = runtime.init()
+        from ..kernels.bonds import build_bond_kernels
+
+        self.device = runtime.resolve_device(device)
+        self.wp, self.k = wp, build_bond_kernels(wp.float64)
+        wp.load_module(self.k.bond_geometry.module, device=self.device)
+        self._tips = wp.array(self.tips, dtype=self.k.vec3, device=self.device)
+        self._receptor_body = wp.array(self.receptor_body, dtype=int, device=self.device)
+        self._receptor_start = wp.array(self.receptor_start, dtype=int, device=self.device)
+        self._curvature = wp.array(self.radius + self.roughness, dtype=wp.float64, device=self.device)
+
+    def _frame(self, bodies, contacts, part):
+        """Device arrays of the configuration: positions, rotations, patch centres and radii."""
+        if self.device is None:
+            self.prepare("cpu")
+        wp, k = self.wp, self.k
+        centre = np.array([b.position for b in bodies])
+        for b in self.cells:
+            centre[b] = contacts.gap(int(b), WALL).point  # the foot of the closest point (x, y are used)
+        return dict(positions=wp.array(np.array([b.position for b in bodies]), dtype=k.vec3, device=self.device),
+                    rotations=wp.array(np.array([b.rotation() for b in bodies]), dtype=k.mat33, device=self.device),
+                    patch_centre=wp.array(centre, dtype=k.vec3, device=self.device),
+                    patch_radius=wp.array(part["contact_radius"], dtype=wp.float64, device=self.device),
+                    curvature=self._curvature)
+
+    def _table(self, part):
+        wp, k = self.wp, self.k
+        return (wp.array(part["receptor"].astype(np.int32), dtype=int, device=self.device),
+                wp.array(part["anchor"], dtype=k.vec3, device=self.device),
+                wp.array(part["offset"], dtype=wp.float64, device=self.device))
+
+    def geometry(self, table, frame):
+        """(vector, moment) device arrays of every table row (``kernels/bonds.py``)."""
+        wp, k = self.wp, self.k
+        vector = wp.zeros(self.capacity, dtype=k.vec3, device=self.device)
+        moment = wp.zeros(self.capacity, dtype=k.mat33, device=self.device)
+        wp.launch(k.bond_geometry, dim=self.capacity, device=self.device,
+                  inputs=[*table, self._tips, self._receptor_body, frame["positions"], frame["rotations"]],
+                  outputs=[vector, moment])
+        return vector, moment
+
+    def tip_forces(self, vector):
+        """The force of each bond on its tip (N, (rows, 3)): -sigma (L - lambda) x_b / L (eq. 4.3)."""
+        length = np.linalg.norm(vector, axis=1)
+        unit = np.divide(vector, length[:, None], out=np.zeros_like(vector), where=length[:, None] > 0)
+        return -self.tension(length)[:, None] * unit
+
+    def reduce(self, receptor, moment, bond_force):
+        """Per adhesive cell: force (N), torque (N m) and number of bonds (one thread per cell)."""
+        wp, k = self.wp, self.k
+        cells = len(self.cells)
+        force = wp.zeros(cells, dtype=k.vec3, device=self.device)
+        torque = wp.zeros(cells, dtype=k.vec3, device=self.device)
+        count = wp.zeros(cells, dtype=int, device=self.device)
+        wp.launch(k.reduce_per_cell, dim=cells, device=self.device,
+                  inputs=[receptor, moment, wp.array(bond_force, dtype=k.vec3, device=self.device), self.max_bonds],
+                  outputs=[force, torque, count])
+        return force.numpy(), torque.numpy(), count.numpy()
+
+    # -- protocol ---------------------------------------------------------------------------
+    def state_columns(self):
+        c, n = self.capacity, self.n_bodies
+        return {"receptor": ("1 (receptor index, -1: free row)", (c,)), "anchor": ("m", (c, 3)),
+                "offset": ("m", (c,)), "birth": ("s", (c,)), "count": ("1", (n,)), "contact_radius": ("m", (n,)),
+                "contact_force": ("N", (n,)), "draws": ("1", ())}
+
+    def derived_columns(self):
+        n = self.n_bodies
+        return {"contact_area": ("m^2", (n,), "Hertz contact area pi a_s^2 of each cell (thesis eq. 4.9)"),
+                "contact_force": ("N", (n,), "normal component of each cell's bond forces towards the wall, the"
+                                  " Hertz load (thesis eq. 4.6)")}
+
+    def derived_values(self, part):
+        return {"contact_area": np.pi * part["contact_radius"] ** 2, "contact_force": part["contact_force"]}
+
+    def initial_state(self, bodies):
+        c, n = self.capacity, self.n_bodies
+        return {"receptor": np.full(c, -1.0), "anchor": np.zeros((c, 3)), "offset": np.zeros(c), "birth": np.zeros(c),
+                "count": np.zeros(n), "contact_radius": np.zeros(n), "contact_force": np.zeros(n),
+                "draws": np.array(0.0)}
+
+    def implicit_coordinates(self, bodies, contacts, part, velocity, angular_velocity, dt):
+        """Three coordinates per bond, the components of its vector x_m - x_o: their rates are
+        linear in the cell's motion (dx/dt = U + Omega x arm), and the law of the length is exact
+        however far the tip moves in a step (a rolling cell's tips move further than a bond is
+        long)."""
+        rows = np.flatnonzero(part["receptor"] >= 0)
+        if not len(rows):
+            return None
+        vector, moment = (a.numpy()[rows] for a in self.geometry(self._table(part), self._frame(bodies, contacts, part)))
+        body = self.receptor_body[part["receptor"][rows].astype(int)]
+        m = 3 * len(rows)
+        unit_force, unit_torque = np.zeros((m, self.n_bodies, 3)), np.zeros((m, self.n_bodies, 3))
+        for i in range(3):
+            unit_force[i::3][np.arange(len(rows)), body, i] = 1.0
+            unit_torque[i::3][np.arange(len(rows)), body] = moment[:, :, i]  # arm x e_i
+        return ImplicitCoordinates(vector.ravel(), unit_force, unit_torque)
+
+    def law(self, s):
+        """U = sigma (|x| - lambda)^2 / 2 of each bond vector x (only |x| > lambda when bonds
+        resist tension only), f = -dU/dx, and the 3 x 3 Hessian sigma [x^ x^ + (stretch / |x|)
+        (I - x^ x^)] (its transverse part left out where a compressed bond makes it negative)."""
+        x = s.reshape(-1, 3)
+        length = np.linalg.norm(x, axis=1)
+        unit = np.divide(x, length[:, None], out=np.zeros_like(x), where=length[:, None] > 0)
+        stretch = length - self.equilibrium_length
+        if not self.compression:
+            stretch = np.maximum(stretch, 0.0)
+        sigma = self.spring_constant
+        outer = unit[:, :, None] * unit[:, None, :]
+        radial = np.where(self.compression | (stretch > 0), sigma, 0.0)[:, None, None] * outer
+        transverse = sigma * np.divide(np.maximum(stretch, 0.0), length, out=np.zeros_like(length), where=length > 0)
+        stiffness = radial + transverse[:, None, None] * (np.eye(3) - outer)
+        energy = np.repeat(0.5 * sigma * stretch**2 / 3.0, 3)
+        return energy, (-sigma * stretch[:, None] * unit).ravel(), stiffness
+
+    def longest_step(self, bodies, contacts, part):
+        """k dt <= kinetics_fraction for the fastest formation and the fastest rupture at this state."""
+        rates = [self.fastest_formation, self.off_rate]
+        rows = np.flatnonzero(part["receptor"] >= 0)
+        if len(rows):
+            vector = self.geometry(self._table(part), self._frame(bodies, contacts, part))[0].numpy()[rows]
+            rates.append(self.rupture_rate(self.tension(np.linalg.norm(vector, axis=1))).max())
+        fastest = max(rates)
+        return np.inf if fastest == 0 else self.kinetics_fraction / fastest
+
+    def advance_state(self, part, start_bodies, end_bodies, end_contacts, dt, end_time):
+        """Rupture, then formation, at the end of the step (counter-based draws 2n and 2n + 1 of
+        the seed's stream), then the new contact radius from the bonds' normal force there."""
+        if self.device is None:
+            self.prepare("cpu")
+        wp, k = self.wp, self.k
+        draw = int(part["draws"])
+        receptor, anchor, offset = table = self._table(part)
+        birth = wp.array(part["birth"], dtype=wp.float64, device=self.device)
+        frame = self._frame(end_bodies, end_contacts, part)
+        vector, _ = self.geometry(table, frame)
+        broken = wp.zeros(self.capacity, dtype=int, device=self.device)
+        wp.launch(k.rupture, dim=self.capacity, device=self.device,
+                  inputs=[receptor, vector, self.spring_constant, self.equilibrium_length, int(self.compression),
+                          self.off_rate, self.reactive_compliance / self.thermal_energy, dt, self.seed, 2 * draw],
+                  outputs=[broken])
+        n_receptors = len(self.tips)
+        bound = wp.zeros(n_receptors, dtype=int, device=self.device)
+        wp.launch(k.mark_bound, dim=self.capacity, device=self.device, inputs=[receptor], outputs=[bound])
+        candidate = wp.zeros(n_receptors, dtype=int, device=self.device)
+        ligand = wp.zeros(n_receptors, dtype=k.vec3, device=self.device)
+        lowering = wp.zeros(n_receptors, dtype=wp.float64, device=self.device)
+        wp.launch(k.formation, dim=n_receptors, device=self.device,
+                  inputs=[bound, self._tips, self._receptor_body, frame["positions"], frame["rotations"],
+                          frame["patch_centre"], frame["patch_radius"], frame["curvature"], self.equilibrium_length,
+                          self.ligand_layer, self.spring_constant / self.thermal_energy, self.reactive_compliance,
+                          self.effective_on_rate, dt, self.seed, 2 * draw + 1],
+                  outputs=[candidate, ligand, lowering])
+        wp.launch(k.insert, dim=len(self.cells), device=self.device,
+                  inputs=[candidate, ligand, lowering, self._receptor_start, self.max_bonds, end_time],
+                  outputs=[receptor, anchor, offset, birth, bound])
+        vector, moment = self.geometry(table, frame)
+        force, _, count = self.reduce(receptor, moment, self.tip_forces(vector.numpy()))
+        normal, counts = np.zeros(self.n_bodies), np.zeros(self.n_bodies)
+        normal[self.cells] = np.maximum(-force[:, 2], 0.0)
+        counts[self.cells] = count
+        compliant = self.shear_modulus > 0
+        radius = np.where(compliant, hertz_contact_radius(normal, self.radius, np.where(compliant, self.shear_modulus,
+                                                                                          1.0), self.poisson_ratio), 0.0)
+        return {"receptor": receptor.numpy().astype(float), "anchor": anchor.numpy().astype(float),
+                "offset": offset.numpy(), "birth": birth.numpy(), "count": counts, "contact_radius": radius,
+                "contact_force": normal, "draws": np.array(float(draw + 1))}
