@@ -99,9 +99,11 @@ def run_figure(h5_path):
     with open_result(h5_path) as f:
         names = json.loads(f.attrs.get("body_names", "[]")) or [f"body {i}" for i in range(pos.shape[1])]
         gap = f["closest_gap"][: len(t)] if "closest_gap" in f else None
+        adhesion = {name: f[name][: len(t)] for name in ("velocity", "bond_count", "contact_area")} \
+            if "bond_count" in f else None
     moved = np.ptp(pos, axis=0).max(axis=1) > 0
-    fig, axes = plt.subplots(2, 2, figsize=(14, 8.5))
-    (height, lateral), (side, top) = axes
+    fig, axes = plt.subplots(3 if adhesion else 2, 2, figsize=(14, 12.5 if adhesion else 8.5))
+    (height, lateral), (side, top) = axes[:2]
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     um = 1e6
     snapshots = snapshot_frames(t)
@@ -136,6 +138,8 @@ def run_figure(h5_path):
     top.set(xlabel="X [um]", ylabel="Y [um]", title="top view (to scale)")
     for ax in (side, top):
         ax.set_aspect("equal", adjustable="datalim")
+    if adhesion:
+        _adhesion_axes(axes[2], t, adhesion, names, moved, colours)
     for ax in axes.ravel():
         ax.grid(alpha=0.3)
         if ax.get_legend_handles_labels()[0]:
@@ -143,6 +147,24 @@ def run_figure(h5_path):
     fig.suptitle(h5_path.name)
     fig.tight_layout()
     return fig
+
+
+def _adhesion_axes(row, t, data, names, moved, colours):
+    """An adhesive run (thesis figs. 4.4, 4.6, 4.9-4.14): each free cell's translational
+    velocity, and its bond count with its Hertz contact area, against time."""
+    velocity, bonds = row
+    area = bonds.twinx()
+    for i, name in enumerate(names):
+        if not moved[i]:
+            continue
+        colour = colours[i % len(colours)]
+        velocity.plot(t, data["velocity"][:, i, 0] * 1e6, color=colour, label=name)
+        bonds.plot(t, data["bond_count"][:, i], color=colour, label=f"{name}: bonds")
+        area.plot(t, data["contact_area"][:, i] * 1e12, "--", color=colour)
+    velocity.set(xlabel="t [s]", ylabel="U: translational velocity along the flow [um/s]",
+                 title="rolling velocity")
+    bonds.set(xlabel="t [s]", ylabel="bonds (solid)", title="bonds and Hertz contact area")
+    area.set_ylabel("contact area [um^2] (dashed)")
 
 
 def plot(h5_path, png_path=None) -> Path:

@@ -76,6 +76,9 @@ def run(scene_path, output, overrides=(), device="cpu", resume=False, progress=p
     else:
         attrs["scene_folder"] = str(Path(scene_path).resolve().parent)
         attrs["body_names"] = json.dumps(list(scene.model.names))
+        bonds = scene.model.interaction("bond")
+        if bonds is not None:
+            attrs["seed"] = bonds.seed  # the bond Monte Carlo's stream (kernels/bonds.py)
     start, steps, t0 = time.perf_counter(), 0, state.time
     with writer:
         if not resume:  # frame 0: the initial state

@@ -3,19 +3,33 @@ field's dotted name and the allowed values or range. Lengths in metres, times in
 viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
 
     [flow]                      shear_rate = 100.0, viscosity = 1.2e-3, wall = true
-    [physics]                   gravity = false, fluid_density = 1000.0, repulsion = false
+    [physics]                   gravity = false, fluid_density = 1000.0, repulsion = false,
+                                adhesion = false
     [repulsion]                 coefficient = 1e-12 (F0, J), inverse_length = 2e9 (tau, 1/m),
                                 cell_roughness = 175e-9, wall_roughness = 50e-9 (thesis eq. 3.1;
                                 the unit convention of F0 is explained in warpbem/forces/repulsion.py)
+    [adhesion]                  (thesis Table 4.1; warpbem/forces/adhesion.py) spring_constant
+                                (N/m, required), receptor_density = 20e12 (1/m^2),
+                                ligand_density (1/m^2; default: ligands in excess),
+                                equilibrium_length = 30e-9, off_rate = 2.4, on_rate = 365.0
+                                (1/s), reactive_compliance = 0.39e-10 (m), temperature = 310.0,
+                                max_bonds = 100 (per cell), compression = false, seed = 0,
+                                roughness (tips; default: repulsion.cell_roughness),
+                                ligand_layer (default: repulsion.wall_roughness),
+                                kinetics_fraction = 0.1 (the step keeps k dt below it)
     [time]                      end = 0.01, dt_max = 1e-4, dt_min = 1e-5, contact_gap = 5e-7,
                                 scheme = "heun", and frames by steps, frame_every = 1, or by
                                 time, frame_interval = 1e-3 (s; the steps land on frame times)
     [solver]                    quadrature_order = 2, contact_refinement = 3.0, tolerance (GMRES;
                                 default 1e-8 for float64, 1e-6 for float32), dtype = "float64",
-                                refine_fixed_at_wall = true
+                                refine_fixed_at_wall = true, reuse_tolerance (m; mobility
+                                snapshots reused across steps, dynamics/hydrodynamics.py;
+                                default 0, with adhesion on ADHESION_REUSE_TOLERANCE)
     [[bodies]]                  name, position = [x, y, z], orientation = [w, x, y, z],
                                 fixed = false, density = 1000.0, force = [0, 0, 0] (N),
-                                torque = [0, 0, 0] (N m) on free bodies, and a mesh:
+                                torque = [0, 0, 0] (N m) on free bodies, adhesive = true (free
+                                bodies with adhesion on), shear_modulus (Pa; none: rigid, no
+                                Hertz patch), poisson_ratio = 0.33, and a mesh:
     [bodies.mesh]               shape = "sphere" (radius, subdivisions) | "spheroid" (radius,
                                 aspect_ratio, subdivisions) | "file" (path, relative to the scene)
 
@@ -35,12 +49,19 @@ from typing import NamedTuple
 
 from ..dynamics.model import Flow, Model, SolverOptions, StepPolicy
 from ..dynamics.state import State
+from ..forces.adhesion import Adhesion
 from ..forces.external import STANDARD_GRAVITY, ExternalLoads, Gravity
 from ..forces.repulsion import Repulsion
 from ..surfaces import mesh as meshes
 from ..surfaces.body import Body
 from ..surfaces.gaps import WALL, Contacts, GapFinder
 from ..surfaces.placement import PlacementError, check_placement
+
+
+ADHESION_REUSE_TOLERANCE = 2e-9  # m: chosen from benchmarks/adhesion.py (README: adhesion)
+ADHESION_KEYS = {"receptor_density", "ligand_density", "spring_constant", "equilibrium_length", "off_rate",
+                 "reactive_compliance", "on_rate", "temperature", "max_bonds", "compression", "seed", "roughness",
+                 "ligand_layer", "kinetics_fraction"}
 
 
 class SceneError(ValueError):
@@ -93,6 +114,9 @@ class BodySpec(NamedTuple):
     density: float
     force: tuple
     torque: tuple
+    adhesive: bool
+    shear_modulus: float | None
+    poisson_ratio: float
 
 
 @dataclass(frozen=True)
@@ -154,31 +178,36 @@ def _mesh(where, spec, folder: Path):
 
 def parse(table: dict, folder: Path = Path(".")) -> Scene:
     """Validate a scene table (as read from TOML) and build the Scene."""
-    _table("scene", table, {"flow", "physics", "repulsion", "time", "solver", "bodies", "sweep"},
+    _table("scene", table, {"flow", "physics", "repulsion", "adhesion", "time", "solver", "bodies", "sweep"},
            ("flow", "time", "bodies"))
     sweep = _sweep_axes(table.get("sweep", {}))
     flow = _table("flow", table["flow"], {"shear_rate", "viscosity", "wall"}, ("shear_rate",))
-    physics = _table("physics", table.get("physics", {}), {"gravity", "fluid_density", "repulsion"})
+    physics = _table("physics", table.get("physics", {}), {"gravity", "fluid_density", "repulsion", "adhesion"})
+    adhesion = _table("adhesion", table.get("adhesion", {}), ADHESION_KEYS)
     repulsion = _table("repulsion", table.get("repulsion", {}),
                        {"coefficient", "inverse_length", "cell_roughness", "wall_roughness"})
     time = _table("time", table["time"], {"end", "dt_max", "dt_min", "contact_gap", "scheme", "frame_every",
                                           "frame_interval"}, ("end",))
     solver = _table("solver", table.get("solver", {}), {"quadrature_order", "contact_refinement", "tolerance",
-                                                        "refine_fixed_at_wall", "dtype"})
+                                                        "refine_fixed_at_wall", "dtype", "reuse_tolerance"})
     if not isinstance(table["bodies"], list) or not table["bodies"]:
         raise SceneError("bodies: expected at least one [[bodies]] entry")
     bodies = []
     for i, spec in enumerate(table["bodies"]):
         where = f"bodies.{i}"
-        _table(where, spec, {"name", "mesh", "position", "orientation", "fixed", "density", "force", "torque"},
-               ("mesh", "position"))
+        _table(where, spec, {"name", "mesh", "position", "orientation", "fixed", "density", "force", "torque",
+                             "adhesive", "shear_modulus", "poisson_ratio"}, ("mesh", "position"))
         bodies.append(BodySpec(str(spec.get("name", f"body{i}")), _mesh(f"{where}.mesh", spec["mesh"], folder),
                                _vector(f"{where}.position", spec["position"], 3),
                                _vector(f"{where}.orientation", spec.get("orientation", [1.0, 0, 0, 0]), 4),
                                _bool(f"{where}.fixed", spec.get("fixed", False)),
                                _number(f"{where}.density", spec.get("density", 1000.0), 100.0, 1e5),
                                _vector(f"{where}.force", spec.get("force", [0.0, 0.0, 0.0]), 3),
-                               _vector(f"{where}.torque", spec.get("torque", [0.0, 0.0, 0.0]), 3)))
+                               _vector(f"{where}.torque", spec.get("torque", [0.0, 0.0, 0.0]), 3),
+                               _bool(f"{where}.adhesive", spec.get("adhesive", True)),
+                               None if "shear_modulus" not in spec else
+                               _number(f"{where}.shear_modulus", spec["shear_modulus"], 0, 1e12, low_open=True),
+                               _poisson(f"{where}.poisson_ratio", spec.get("poisson_ratio", 0.33))))
         if bodies[-1].fixed and (any(bodies[-1].force) or any(bodies[-1].torque)):
             raise SceneError(f"{where}.force: body {i} is fixed; its load is what holds it (an output), so give"
                              " force and torque for free bodies only")
@@ -207,7 +236,13 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
         interactions.append(ExternalLoads(fixed, [b.force for b in bodies], [b.torque for b in bodies]))
     if _bool("physics.repulsion", physics.get("repulsion", False)):
         interactions.append(repulsion_model)
+    adhesive = _bool("physics.adhesion", physics.get("adhesion", False))
+    if adhesive:
+        interactions.append(_adhesion(adhesion, bodies, repulsion_model, dt_min,
+                                      _bool("flow.wall", flow.get("wall", True))))
     tolerance = solver.get("tolerance")
+    reuse = _number("solver.reuse_tolerance", solver.get("reuse_tolerance", ADHESION_REUSE_TOLERANCE if adhesive
+                                                          else 0.0), 0, 1e-6)
     model = Model(
         meshes=meshes_, fixed=fixed, names=[b.name for b in bodies], interactions=interactions,
         flow=Flow(_number("flow.shear_rate", flow["shear_rate"], -1e6, 1e6),
@@ -218,12 +253,59 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
             contact_refinement=_number("solver.contact_refinement", solver.get("contact_refinement", 3.0), 0, 20),
             refine_fixed_at_wall=_bool("solver.refine_fixed_at_wall", solver.get("refine_fixed_at_wall", True)),
             tolerance=None if tolerance is None else _number("solver.tolerance", tolerance, 0, 0.1, low_open=True),
-            dtype=_choice("solver.dtype", solver.get("dtype", "float64"), ("float64", "float32"))),
+            dtype=_choice("solver.dtype", solver.get("dtype", "float64"), ("float64", "float32")),
+            reuse_tolerance=reuse),
         policy=StepPolicy(dt_max, dt_min,
                           _number("time.contact_gap", time.get("contact_gap", 5e-7), 0, 1e-2, low_open=True)),
         scheme=scheme)
     return Scene(raw=copy.deepcopy(table), bodies=tuple(bodies), model=model, end=end, frame_every=frame_every,
                  frame_interval=frame_interval, sweep=sweep)
+
+
+def _poisson(where, value):
+    value = _number(where, value, -1.0, 0.5)
+    if value in (-1.0, 0.5):
+        raise SceneError(f"{where}: {value:g} is outside the allowed range (-1, 0.5) (linear elasticity)")
+    return value
+
+
+def _adhesion(table, bodies, repulsion: Repulsion, dt_min: float, wall: bool) -> Adhesion:
+    """The [adhesion] table and the bodies' keys as an Adhesion, checked by field name."""
+    if not wall:
+        raise SceneError("physics.adhesion: bonds form with ligands on the wall; it needs flow.wall = true")
+    if "spring_constant" not in table:
+        raise SceneError("adhesion.spring_constant: missing (N/m; thesis Table 4.1: 0.5-100 dyn/cm = 5e-4-0.1 N/m)")
+    get = table.get
+    if not any(b.adhesive and not b.fixed for b in bodies):
+        raise SceneError("bodies: adhesion is on but no free body is adhesive (bodies.N.adhesive)")
+    try:
+        adhesion = Adhesion(
+            [b.mesh for b in bodies], [b.fixed for b in bodies], adhesive=[b.adhesive for b in bodies],
+            receptor_density=_number("adhesion.receptor_density", get("receptor_density", 20e12), 0, 1e18, low_open=True),
+            ligand_density=(None if "ligand_density" not in table else
+                            _number("adhesion.ligand_density", table["ligand_density"], 0, 1e18, low_open=True)),
+            spring_constant=_number("adhesion.spring_constant", table["spring_constant"], 0, 1e3, low_open=True),
+            equilibrium_length=_number("adhesion.equilibrium_length", get("equilibrium_length", 30e-9), 0, 1e-6),
+            off_rate=_number("adhesion.off_rate", get("off_rate", 2.4), 0, 1e9),
+            reactive_compliance=_number("adhesion.reactive_compliance", get("reactive_compliance", 0.39e-10), 0, 1e-8),
+            on_rate=_number("adhesion.on_rate", get("on_rate", 365.0), 0, 1e9),
+            temperature=_number("adhesion.temperature", get("temperature", 310.0), 0, 1e4, low_open=True),
+            max_bonds=_number("adhesion.max_bonds", get("max_bonds", 100), 1, 1e5, integer=True),
+            compression=_bool("adhesion.compression", get("compression", False)),
+            seed=_number("adhesion.seed", get("seed", 0), 0, 2**31 - 1, integer=True),
+            roughness=_number("adhesion.roughness", get("roughness", repulsion.cell_roughness), 0, 1e-5),
+            ligand_layer=_number("adhesion.ligand_layer", get("ligand_layer", repulsion.wall_roughness), 0, 1e-5),
+            kinetics_fraction=_number("adhesion.kinetics_fraction", get("kinetics_fraction", 0.1), 0, 1, low_open=True),
+            shear_modulus=[b.shear_modulus for b in bodies], poisson_ratio=[b.poisson_ratio for b in bodies])
+    except ValueError as err:
+        raise SceneError(f"adhesion: {err}") from err
+    # the step is bounded by the kinetics, k dt <= kinetics_fraction; dt_min must allow it
+    for name, rate in (("on_rate", adhesion.fastest_formation), ("off_rate", adhesion.off_rate)):
+        if rate * dt_min > adhesion.kinetics_fraction:
+            raise SceneError(f"time.dt_min: {dt_min:g} s is too long for the bond kinetics ({name}: k dt ="
+                             f" {rate * dt_min:.3g} > kinetics_fraction {adhesion.kinetics_fraction:g}); the"
+                             f" allowed range is dt_min <= {adhesion.kinetics_fraction / rate:.3g} s")
+    return adhesion
 
 
 def _choice(where, value, allowed):
