@@ -179,5 +179,5 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
         if r >= 0:
             bound[r] = 1
 
-    return SimpleNamespace(vec3=vec3, mat33=mat33, bond_geometry=bond_geometry, reduce_per_cell=reduce_per_cell,
+    return SimpleNamespace(vec3=vec3, mat33=mat33, hertz_lowering=hertz_lowering, bond_geometry=bond_geometry, reduce_per_cell=reduce_per_cell,
                            rupture=rupture, formation=formation, insert=insert, mark_bound=mark_bound)

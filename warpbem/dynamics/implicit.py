@@ -96,7 +96,11 @@ class ImplicitSystem:
             gradient = self.quadratic @ z - self.rate_response.T @ force
             step = -np.linalg.lstsq(self.hessian(stiffness, dt), gradient, rcond=1e-14)[0]
             moves = dt * np.abs(self.rate_response @ step)
-            if np.all(moves <= LENGTH_TOLERANCE + 1e-13 * np.abs(self.end_values(z, dt))):
+            # converged when the step moves no coordinate and changes the motion it causes by
+            # no more than round-off (in the dissipation norm z.Q.z: a rolling cell can turn
+            # about its bonds without stretching them, so coordinates alone do not tell)
+            if (np.all(moves <= LENGTH_TOLERANCE + 1e-13 * np.abs(self.end_values(z, dt)))
+                    and step @ self.quadratic @ step <= 1e-24 * max(z @ self.quadratic @ z, 1e-300)):
                 z = z + step
                 return z, self.evaluate(self.end_values(z, dt))[1]
             slope = gradient @ step

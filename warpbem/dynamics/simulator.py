@@ -156,9 +156,12 @@ class Simulator:
             start += len(c.values)
         coordinates = ImplicitCoordinates.join([c for _, c in found])
         basis, kind = self.hydro.basis(bodies, coordinates, snapshot)
-        rate_response = np.array([coordinates.rates(u, w) for u, w in zip(basis.velocity, basis.angular_velocity)]).T
+        quadratic = basis.quadratic()
+        # rates consistent with the symmetrised dissipation (reciprocity; hydrodynamics.py)
+        rate_response = quadratic if kind == "coordinates" else np.array(
+            [coordinates.rates(u, w) for u, w in zip(basis.velocity, basis.angular_velocity)]).T
         rates = coordinates.rates(background.velocity, background.angular_velocity)
-        system = ImplicitSystem(coordinates.values, rates, rate_response, basis.quadratic(),
+        system = ImplicitSystem(coordinates.values, rates, rate_response, quadratic,
                                 [(where, x.law) for x, where in owners])
         at_state = system.evaluate(coordinates.values)[1]
         if kind == "coordinates":

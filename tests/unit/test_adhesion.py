@@ -1,0 +1,219 @@
+"""Adhesion (thesis ch. 4) at the level of its parts: receptors, the Hertz contact of eq. 4.9
+and Johnson's surface displacement, the per-cell reductions of eq. 4.3-4.4 against NumPy, the
+vector law of the implicit step, the formation rate of eq. 4.2 in the kernel against the
+formula, counter-based draws, and scene validation by field name."""
+
+import numpy as np
+import pytest
+
+import warpbem as wb
+from warpbem.app import scene
+from warpbem.forces.adhesion import BOLTZMANN, Adhesion, contact_traction, hertz_contact_radius
+from warpbem.surfaces.body import Body
+from warpbem.surfaces.gaps import Contacts, GapFinder
+
+
+def write(tmp_path, text):
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    return path
+
+A = 2e-6
+MESH = wb.mesh.sphere(A, 2)
+TABLE_4_1 = dict(receptor_density=20e12, spring_constant=5e-4, equilibrium_length=30e-9, off_rate=2.4,
+                 reactive_compliance=0.39e-10, on_rate=365.0)
+
+
+def adhesion(**changes):
+    return Adhesion([MESH], [False], **{**TABLE_4_1, **changes})
+
+
+def test_receptors_are_microvillus_tips_spread_by_area():
+    """n_r x area receptors (20 /um^2 on the 2 um cell's mesh: 1004; on the exact sphere 1005.3),
+    each 175 nm out from the sphere
+    (the QUAD9 sphere is exact at its nodes, within 0.6 % of the radius between them), spread
+    evenly: the mean tip position is near the centre and each octant holds an eighth."""
+    adh = adhesion()
+    area = MESH.area()
+    assert len(adh.tips) == round(20e12 * area) == 1004
+    r = np.linalg.norm(adh.tips, axis=1)
+    np.testing.assert_allclose(r, A + 175e-9, rtol=0.006)
+    assert np.linalg.norm(adh.tips.mean(axis=0)) < 0.1 * A
+    octants = np.unique((adh.tips > 0) @ [1, 2, 4], return_counts=True)[1]
+    assert len(octants) == 8 and np.all(np.abs(octants - len(r) / 8) < 4 * np.sqrt(len(r) / 8))
+
+
+def test_hertz_contact_radius_is_eq_4_9():
+    """a_s = (3 F a / (4 E*))^(1/3), E* = E / (1 - nu^2), E = 2 G (1 + nu): 100 pN on a 5 um
+    cell of G = 4 kPa, nu = 0.33 gives E = 10.64 kPa, E* = 11.94 kPa, a_s = 0.3155 um
+    (hand-computed), and a_s grows as F^(1/3) a^(1/3) G^(-1/3); the traction of eq. 4.8 is
+    -3 F / (2 pi a_s^2)."""
+    a_s = hertz_contact_radius(1e-10, 5e-6, 4e3, 0.33)
+    assert a_s == pytest.approx((3 * 1e-10 * 5e-6 / (4 * 10640.0 / (1 - 0.33**2))) ** (1 / 3), rel=1e-12)
+    assert a_s == pytest.approx(0.3155e-6, rel=1e-3)
+    assert hertz_contact_radius(8e-10, 5e-6, 4e3, 0.33) == pytest.approx(2 * a_s, rel=1e-12)
+    assert hertz_contact_radius(1e-10, 5e-6, 32e3, 0.33) == pytest.approx(a_s / 2, rel=1e-12)
+    assert hertz_contact_radius(-1e-10, 5e-6, 4e3, 0.33) == 0.0  # no pull, no contact
+    assert contact_traction(1e-10, a_s) == pytest.approx(-3e-10 / (2 * np.pi * a_s**2))
+
+
+def test_patch_lowering_is_johnsons_hertz_surface():
+    """The lowering of tips in the patch (kernels/bonds.py): -rho^2 / 2R inside (flat), and
+    u(rho) - a^2 / R outside with Johnson's (1985, eq. 3.42) normal displacement of a Hertz
+    contact, here from the integral of the pressure p0 sqrt(1 - r^2 / a^2) over the contact
+    (independent of the closed form): continuous, and approaching the rigid approach -a^2 / R."""
+    wp = wb.runtime.init()
+    from warpbem.kernels.bonds import build_bond_kernels
+
+    k = build_bond_kernels(wp.float64)
+
+    @wp.kernel
+    def lowering(rho: wp.array(dtype=wp.float64), a: wp.float64, radius: wp.float64, out: wp.array(dtype=wp.float64)):
+        i = wp.tid()
+        out[i] = k.hertz_lowering(rho[i], a, radius)
+
+    a, radius = 1e-6, 5e-6
+    rho = np.array([0.0, 0.5e-6, 1e-6, 1.2e-6, 2e-6, 5e-6])
+    out = wp.zeros(len(rho), dtype=wp.float64)
+    wp.launch(lowering, dim=len(rho), inputs=[wp.array(rho, dtype=wp.float64), a, radius, out])
+    got = out.numpy()
+    np.testing.assert_allclose(got[:3], -rho[:3] ** 2 / (2 * radius), rtol=1e-12)
+    # u(rho) of the Hertz pressure by quadrature: u = (1 / (pi E*)) int p(r') dA' / |x - x'|,
+    # with E* from p0 = 2 E* a / (pi R) (Johnson eq. 4.23): u = 2 a / (pi^2 R) int sqrt(1 - r^2/a^2) / |x - x'| dA'
+    r, w = np.polynomial.legendre.leggauss(200)
+    for rho_i, value in zip(rho[3:], got[3:]):
+        rr = 0.5 * a * (r + 1)
+        tt = np.pi * (r + 1)
+        R, T = np.meshgrid(rr, tt, indexing="ij")
+        weight = np.outer(w * 0.5 * a, w * np.pi) * R
+        dist = np.sqrt(rho_i**2 + R**2 - 2 * rho_i * R * np.cos(T))
+        u = 2 * a / (np.pi**2 * radius) * np.sum(weight * np.sqrt(1 - R**2 / a**2) / dist)
+        assert value == pytest.approx(u - a**2 / radius, rel=2e-4)
+    # far away the point-load (Boussinesq) limit u = F / (pi E* rho) = 4 a^3 / (3 pi R rho)
+    assert got[-1] == pytest.approx(4 * a**3 / (3 * np.pi * radius * rho[-1]) - a**2 / radius, rel=0.01)
+
+
+def test_bond_loads_match_numpy_and_the_vector_law_is_exact():
+    """Eq. 4.3-4.4 on the device against NumPy: for random bond vectors on a cell, the per-cell
+    force sum_b F_b and torque sum_b (x_m - x_c) x F_b; and the implicit step's vector law:
+    f = -dU/dx and its 3 x 3 stiffness by central differences (tension only and both)."""
+    adh = adhesion(max_bonds=50)
+    adh.prepare("cpu")
+    rng = np.random.default_rng(3)
+    body = Body(MESH, position=(1e-6, -2e-6, A + 0.3e-6), orientation=(0.9, 0.1, -0.3, 0.2))
+    part = adh.initial_state([body])
+    rows = rng.choice(50, size=30, replace=False)
+    receptors = rng.choice(len(adh.tips), size=30, replace=False)
+    part["receptor"][rows] = receptors
+    tips = body.position + adh.tips[receptors] @ body.rotation().T
+    part["anchor"][rows] = tips - rng.normal(0, 30e-9, (30, 3)) - [0, 0, 30e-9]
+    contacts = Contacts([body], [MESH.size()], True, GapFinder())
+    vector, moment = adh.geometry(adh._table(part), adh._frame([body], contacts, part))
+    forces = adh.tip_forces(vector.numpy())
+    force, torque, count = adh.reduce(adh._table(part)[0], moment, forces)
+    expected = adh.tip_forces(tips - part["anchor"][rows])
+    np.testing.assert_allclose(force[0], expected.sum(axis=0), rtol=1e-12)
+    np.testing.assert_allclose(torque[0], np.cross(tips - body.position, expected).sum(axis=0), rtol=1e-12)
+    assert count[0] == 30
+    x = rng.normal(0, 40e-9, (5, 3))
+    for compression in (False, True):
+        law = adhesion(compression=compression).law
+        energy, f, stiffness = law(x.ravel())
+        h = 1e-13
+        for i in range(3):
+            step = np.zeros_like(x)
+            step[:, i] = h
+            up, down = law((x + step).ravel()), law((x - step).ravel())
+            np.testing.assert_allclose(f.reshape(-1, 3)[:, i],
+                                       -(up[0] - down[0]).reshape(-1, 3).sum(axis=1) / (2 * h), rtol=1e-5, atol=1e-16)
+            if compression is False:
+                np.testing.assert_allclose(stiffness[:, :, i], -(up[1] - down[1]).reshape(-1, 3) / (2 * h),
+                                           rtol=1e-4, atol=1e-9)
+
+
+def test_formation_in_the_kernel_follows_eq_4_2():
+    """The expected number of bonds formed in one step, sum_r 1 - exp(-k_f(d_r) dt) with k_f of
+    eq. 4.2 and each tip's deviation d_r from the rest length (NumPy, from the tips), against
+    the mean over 300 independent draws of the kernel (within 4 standard errors); a draw
+    depends only on (seed, counter): the same draw repeats exactly, another differs."""
+    adh = adhesion(spring_constant=3e-6, max_bonds=2000)
+    adh.prepare("cpu")
+    body = Body(MESH, position=(0, 0, A + 0.2e-6))
+    contacts = Contacts([body], [MESH.size()], True, GapFinder())
+    tips = body.position + adh.tips
+    anchor = np.clip(tips[:, 2] - 30e-9, 0.0, 50e-9)
+    d = tips[:, 2] - anchor - 30e-9
+    kt = BOLTZMANN * 310.0
+    dt = 1e-3
+    p = 1 - np.exp(-365.0 * np.exp(3e-6 * np.abs(d) * (0.39e-10 - 0.5 * np.abs(d)) / kt) * dt)
+    start = adh.initial_state([body])
+    counts = []
+    for draw in range(300):
+        part = dict(start, draws=np.array(float(draw)))
+        counts.append(adh.advance_state(part, [body], [body], contacts, dt, dt)["count"][0])
+    counts = np.array(counts)
+    assert p.sum() > 3  # the test can fail: several formations expected per step
+    assert abs(counts.mean() - p.sum()) < 4 * np.sqrt((p * (1 - p)).sum() / len(counts))
+    again = adh.advance_state(dict(start, draws=np.array(7.0)), [body], [body], contacts, dt, dt)
+    first = adh.advance_state(dict(start, draws=np.array(7.0)), [body], [body], contacts, dt, dt)
+    other = adh.advance_state(dict(start, draws=np.array(8.0)), [body], [body], contacts, dt, dt)
+    np.testing.assert_array_equal(again["receptor"], first["receptor"])
+    assert not np.array_equal(other["receptor"], first["receptor"])
+
+
+def test_cap_on_bonds_per_cell():
+    """With max_bonds = 5 (thesis figs. 4.12-4.14 use 40) no cell ever holds more."""
+    adh = adhesion(spring_constant=1e-9, on_rate=1e4, max_bonds=5)
+    body = Body(MESH, position=(0, 0, A + 0.2e-6))
+    contacts = Contacts([body], [MESH.size()], True, GapFinder())
+    part = adh.advance_state(adh.initial_state([body]), [body], [body], contacts, 1e-3, 1e-3)
+    assert part["count"][0] == 5 and np.sum(part["receptor"] >= 0) == 5
+
+
+BONDS = """
+[flow]
+shear_rate = 100.0
+viscosity = 1.0e-3
+[physics]
+gravity = true
+repulsion = true
+adhesion = true
+[adhesion]
+spring_constant = 5.0e-4
+[time]
+end = 0.001
+dt_max = 1.0e-3
+dt_min = 1.0e-6
+[[bodies]]
+position = [0.0, 0.0, 2.24e-6]
+density = 1050.0
+mesh = { shape = "sphere", radius = 2.0e-6, subdivisions = 2 }
+"""
+
+
+@pytest.mark.parametrize("override, message", [
+    ("adhesion.off_rate=-1.0", r"adhesion.off_rate: -1 is outside the allowed range \[0, 1e\+09\]"),
+    ("adhesion.receptor_density=0.0", r"adhesion.receptor_density: 0 is outside the allowed range \(0"),
+    ("adhesion.spring_constant=0.0", r"adhesion.spring_constant: 0 is outside the allowed range \(0"),
+    ("adhesion.ligand_density=-5.0", r"adhesion.ligand_density: -5 is outside"),
+    ("adhesion.max_bonds=0", r"adhesion.max_bonds: 0 is outside"),
+    ("adhesion.bogus=1", r"adhesion: unknown key 'bogus'"),
+    ("time.dt_min=1.0e-3", r"time.dt_min: 0.001 s is too long for the bond kinetics \(on_rate: k dt = 0.365 >"
+                           r" kinetics_fraction 0.1\); the allowed range is dt_min <= 0.000274"),
+    ("bodies.0.poisson_ratio=0.5", r"bodies.0.poisson_ratio: 0.5 is outside the allowed range \(-1, 0.5\)"),
+    ("bodies.0.shear_modulus=-1.0", r"bodies.0.shear_modulus: -1 is outside"),
+    ("flow.wall=false", r"physics.adhesion: bonds form with ligands on the wall"),
+    ("bodies.0.adhesive=false", r"no free body is adhesive"),
+])
+def test_adhesion_scene_keys_are_checked_by_name(tmp_path, override, message):
+    path = write(tmp_path, BONDS)
+    with pytest.raises(scene.SceneError, match=message):
+        scene.load(path, [override])
+
+
+def test_adhesion_scene_builds_the_interaction(tmp_path):
+    s = scene.load(write(tmp_path, BONDS), ["bodies.0.shear_modulus=4.0e3", "adhesion.seed=9"])
+    bonds = s.model.interaction("bond")
+    assert bonds.seed == 9 and bonds.spring_constant == 5e-4 and bonds.shear_modulus[0] == 4e3
+    assert s.model.solver.reuse_tolerance == scene.ADHESION_REUSE_TOLERANCE
+    assert scene.load(write(tmp_path, BONDS), ["physics.adhesion=false"]).model.solver.reuse_tolerance == 0.0
