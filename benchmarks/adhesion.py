@@ -1,0 +1,214 @@
+"""Adhesion cost and accuracy (issue 9 items 1, 4, 10), on the machine it runs on, side by side:
+
+1. bond kernels: bonds per second of the loads (geometry + per-cell sums, eq. 4.3-4.4) and of
+   the kinetics (rupture, formation, insertion) for 1e3 - 1e5 bonds over many cells, beside
+   the time of one mobility solve of a k = 4 cell near the wall;
+2. mobility reuse: one cell captured from the free stream (thesis figs. 4.9-4.11 setup: a = 5
+   um, sigma = 0.5 dyn/cm, G = 4 kPa, 100 1/s), solved at every state (the reference) and
+   from snapshots on lattices of 0.5 - 20 nm, same seed and steps: the error of the distance
+   rolled before arrest, of the velocity history and of the bond count, against the speed-up;
+3. the step: kinetics_fraction (k dt per step) from 0.4 to 0.025, 8 seeds each: mean distance
+   to arrest and bonds at the end, against the cost;
+4. wall time per simulated second of one rolling cell (k = 4, the scene defaults) and of four
+   cells rolling side by side with full hydrodynamic interaction.
+
+    python benchmarks/adhesion.py [--quick] [--device cuda:0]
+
+Writes results/bench/adhesion_*.csv and adhesion.png.
+"""
+
+import argparse
+import time
+import warnings
+
+import numpy as np
+
+import warpbem as wb
+from common import output, print_table, pyplot, write_csv
+from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy
+from warpbem.dynamics.simulator import Simulator
+from warpbem.forces.adhesion import Adhesion
+from warpbem.forces.external import STANDARD_GRAVITY, Gravity
+from warpbem.forces.repulsion import Repulsion
+from warpbem.surfaces.body import Body
+from warpbem.surfaces.gaps import Contacts, GapFinder
+
+warnings.simplefilter("ignore", wb.ContactResolutionWarning)
+A = 5e-6
+REST = A + 236e-9  # m: centre height where gravity and eq. 3.1 balance
+TABLE_4_1 = dict(receptor_density=20e12, spring_constant=5e-4, equilibrium_length=30e-9, off_rate=2.4,
+                 reactive_compliance=0.39e-10, on_rate=365.0)
+
+
+def kernel_throughput(device, sizes):
+    """Bonds per second of the bond loads and of one kinetics pass, and one solve's time."""
+    mesh = wb.mesh.sphere(A, 2)
+    rows = []
+    for cells, cap in sizes:
+        meshes = [mesh] * cells
+        positions = np.array([[30e-6 * (i % 32), 30e-6 * (i // 32), REST] for i in range(cells)])
+        adh = Adhesion(meshes, [False] * cells, **TABLE_4_1, max_bonds=cap)
+        adh.prepare(device)
+        bodies = [Body(mesh, position=p) for p in positions]
+        contacts = Contacts(bodies, [mesh.size()] * cells, True, GapFinder(device))
+        part = adh.initial_state(bodies)
+        rng = np.random.default_rng(0)
+        for c in range(cells):  # a full table: receptors of the cell, anchors 10-50 nm below their tips
+            start, end = adh.receptor_start[c], adh.receptor_start[c + 1]
+            picked = rng.choice(np.arange(start, end), size=cap, replace=False)
+            part["receptor"][c * cap:(c + 1) * cap] = picked
+            tips = positions[c] + adh.tips[picked]
+            part["anchor"][c * cap:(c + 1) * cap] = tips - [0, 0, 30e-9] - rng.uniform(0, 20e-9, (cap, 1)) * [0, 0, 1]
+        frame = adh._frame(bodies, contacts, part)
+        table = adh._table(part)
+
+        def loads():
+            vector, moment = adh.geometry(table, frame)
+            adh.reduce(table[0], moment, adh.tip_forces(vector.numpy()))
+
+        def kinetics():
+            adh.advance_state(part, bodies, bodies, contacts, 1e-4, 1e-4)
+
+        for fn in (loads, kinetics):
+            fn()  # warm-up (compilation)
+        t_loads = min(_timed(loads) for _ in range(3))
+        t_kin = min(_timed(kinetics) for _ in range(3))
+        n = cells * cap
+        rows.append(dict(cells=cells, bonds=n, receptors=len(adh.tips), loads_s=t_loads, loads_bonds_per_s=n / t_loads,
+                         kinetics_s=t_kin, kinetics_bonds_per_s=n / t_kin))
+    solver = SolverOptions().build(Flow(100.0, 1e-3), device)
+    cell = [Body(wb.mesh.sphere(A, 4), position=(0, 0, REST))]
+    solver.solve(cell)
+    t_solve = min(_timed(lambda: solver.solve(cell, initial_guess=None)) for _ in range(3))
+    for r in rows:
+        r["loads_per_solve"] = r["loads_s"] / t_solve
+    return rows, t_solve
+
+
+def _timed(fn):
+    t = time.perf_counter()
+    fn()
+    return time.perf_counter() - t
+
+
+def rolling_model(k=3, reuse=2e-9, fraction=0.1, seed=1, dt_max=1e-4, cells=1, spacing=15e-6):
+    mesh = wb.mesh.sphere(A, k)
+    n = cells
+    gravity = Gravity([mesh] * n, [False] * n, [1050.0] * n, 1000.0, STANDARD_GRAVITY)
+    bonds = Adhesion([mesh] * n, [False] * n, **TABLE_4_1, seed=seed, shear_modulus=[4e3] * n, max_bonds=200,
+                     kinetics_fraction=fraction)
+    model = Model([mesh] * n, [False] * n, Flow(100.0, 1e-3), interactions=[gravity, Repulsion(), bonds],
+                  solver=SolverOptions(reuse_tolerance=reuse), policy=StepPolicy(dt_max, 1e-7, 1e-9), scheme="euler")
+    positions = [[0.0, spacing * (i - (n - 1) / 2), REST] for i in range(n)]
+    return model, model.initial_state(positions)
+
+
+def roll(model, state, end, device):
+    sim = Simulator(model, device)
+    t0 = time.perf_counter()
+    times, u, bonds = [state.time], [sim.frame(state).velocity[:, 0]], [0]
+    while state.time < end:
+        state, frame = sim.step(state, end)
+        times.append(state.time)
+        u.append(frame.velocity[:, 0])
+        bonds.append(frame.parts["bond"]["count"][0])
+    return dict(wall=time.perf_counter() - t0, steps=state.steps, snapshots=sim.hydro.snapshots_solved,
+                x=state.positions[:, 0], t=np.array(times), u=np.array(u), bonds=np.array(bonds))
+
+
+def reuse_chart(device, tolerances, end):
+    runs = {d: roll(*rolling_model(reuse=d), end, device) for d in [0.0] + tolerances}
+    ref = runs[0.0]
+    rows = []
+    for d, r in runs.items():
+        rows.append(dict(reuse_nm=d * 1e9, wall_s=r["wall"], speedup=ref["wall"] / r["wall"],
+                         snapshots=r["snapshots"], steps=r["steps"], rolled_um=r["x"][0] * 1e6,
+                         rolled_error=abs(r["x"][0] - ref["x"][0]) / ref["x"][0],
+                         velocity_rms_error=np.sqrt(np.mean((r["u"][:, 0] - ref["u"][:, 0]) ** 2)) / ref["u"][0, 0],
+                         bonds_end=int(r["bonds"][-1]), bonds_error=int(r["bonds"][-1] - ref["bonds"][-1])))
+    return rows
+
+
+def step_chart(device, fractions, seeds, end):
+    rows = []
+    for f in fractions:
+        runs = [roll(*rolling_model(fraction=f, seed=s, dt_max=1.0), end, device) for s in range(seeds)]
+        rolled = np.array([r["x"][0] for r in runs]) * 1e6
+        bonds = np.array([r["bonds"][-1] for r in runs])
+        rows.append(dict(kinetics_fraction=f, dt_s=np.mean([np.diff(r["t"]).mean() for r in runs]), wall_s=np.mean([r["wall"] for r in runs]),
+                         rolled_um=rolled.mean(), rolled_se=rolled.std(ddof=1) / np.sqrt(seeds),
+                         bonds_end=bonds.mean(), bonds_se=bonds.std(ddof=1) / np.sqrt(seeds)))
+    ref = rows[-1]
+    for r in rows:
+        r["speedup"] = ref["wall_s"] / r["wall_s"]
+        r["rolled_error"] = abs(r["rolled_um"] - ref["rolled_um"]) / ref["rolled_um"]
+    return rows
+
+
+def speed(device, end, cells):
+    rows = []
+    for n in cells:
+        model, state = rolling_model(k=4, reuse=2e-9, fraction=0.1, dt_max=1.0, cells=n)
+        r = roll(model, state, end, device)
+        rows.append(dict(cells=n, simulated_s=end, wall_s=r["wall"], wall_per_simulated_s=r["wall"] / end,
+                         steps=r["steps"], snapshots=r["snapshots"], mean_velocity_um_s=r["x"].mean() / end * 1e6,
+                         bonds_end=int(r["bonds"][-1])))
+    return rows
+
+
+def chart(reuse_rows, step_rows, path):
+    plt = pyplot()
+    fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.5))
+    for r in reuse_rows[1:]:
+        a.loglog(r["speedup"], max(r["rolled_error"], 1e-6), "o", color="C0")
+        a.annotate(f"{r['reuse_nm']:g} nm", (r["speedup"], max(r["rolled_error"], 1e-6)), fontsize=8)
+        a.loglog(r["speedup"], max(r["velocity_rms_error"], 1e-6), "s", color="C1")
+    a.plot([], [], "o", color="C0", label="distance rolled before arrest")
+    a.plot([], [], "s", color="C1", label="velocity history (RMS / free-stream velocity)")
+    a.set(xlabel="speed-up over solving every state", ylabel="relative error (same seed, same steps)",
+          title="mobility snapshots: lattice spacing")
+    a.legend(fontsize=8)
+    x = [r["speedup"] for r in step_rows]
+    b.semilogx(x, [r["rolled_um"] for r in step_rows], "o-")
+    b.errorbar(x, [r["rolled_um"] for r in step_rows], yerr=[2 * r["rolled_se"] for r in step_rows], fmt="none")
+    for r, xi in zip(step_rows, x):
+        b.annotate(f"k dt = {r['kinetics_fraction']:g}", (xi, r["rolled_um"]), fontsize=8)
+    b.set(xlabel="speed-up over k dt = %g" % step_rows[-1]["kinetics_fraction"],
+          ylabel="distance rolled before arrest [um] (mean, 2 SE)", title="step: kinetics fraction")
+    for ax in (a, b):
+        ax.grid(alpha=0.3, which="both")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    return path
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true", help="smaller sizes and shorter runs")
+    parser.add_argument("--device", default="cpu")
+    args = parser.parse_args()
+    q = args.quick
+    sizes = [(10, 100), (100, 100)] if q else [(10, 100), (100, 100), (1000, 100)]
+    rows, t_solve = kernel_throughput(args.device, sizes)
+    print(f"\n1. bond kernels on {args.device} (one solve of a k = 4 cell near the wall: {t_solve:.3f} s)")
+    print_table(rows)
+    write_csv("adhesion_kernels.csv", rows)
+    print("\n2. mobility reuse (one cell captured from the free stream, k = 3)")
+    reuse_rows = reuse_chart(args.device, [2e-9, 10e-9] if q else [0.5e-9, 1e-9, 2e-9, 5e-9, 10e-9, 20e-9],
+                             0.005 if q else 0.02)
+    print_table(reuse_rows)
+    write_csv("adhesion_reuse.csv", reuse_rows)
+    print("\n3. step (kinetics fraction; reuse 2 nm)")
+    step_rows = step_chart(args.device, [0.4, 0.1, 0.025] if q else [0.4, 0.2, 0.1, 0.05, 0.025], 2 if q else 8,
+                           0.005 if q else 0.03)
+    print_table(step_rows)
+    write_csv("adhesion_step.csv", step_rows)
+    print("\n4. wall time per simulated second (k = 4, defaults)")
+    speed_rows = speed(args.device, 0.02 if q else 1.0, [1] if q else [1, 4])
+    print_table(speed_rows)
+    write_csv("adhesion_speed.csv", speed_rows)
+    print("chart:", chart(reuse_rows, step_rows, output("adhesion.png")))
+
+
+if __name__ == "__main__":
+    main()
