@@ -217,3 +217,19 @@ def test_adhesion_scene_builds_the_interaction(tmp_path):
     assert bonds.seed == 9 and bonds.spring_constant == 5e-4 and bonds.shear_modulus[0] == 4e3
     assert s.model.solver.reuse_tolerance == scene.ADHESION_REUSE_TOLERANCE
     assert scene.load(write(tmp_path, BONDS), ["physics.adhesion=false"]).model.solver.reuse_tolerance == 0.0
+
+
+def test_adhesion_states_follow_the_documented_rule():
+    """warpbem/app/adhesion_states.py: the mean velocity over the last half of the run against
+    the free velocity: under 1 % firm, under 50 % with bonds rolling, else no adhesion."""
+    from warpbem.app.adhesion_states import classify
+
+    t = np.linspace(0, 1, 11)
+    v_h = 350e-6
+    assert classify(t, 0.001 * v_h * t, np.full(11, 20), v_h) == ("firm adhesion", pytest.approx(0.001))
+    assert classify(t, 0.1 * v_h * t, np.full(11, 5), v_h) == ("rolling", pytest.approx(0.1))
+    assert classify(t, 0.9 * v_h * t, np.full(11, 1), v_h)[0] == "no adhesion"
+    stopped_then_released = np.where(t < 0.5, 0.0, 0.3 * v_h * (t - 0.5))
+    assert classify(t, stopped_then_released, np.where(t < 0.5, 3, 0), v_h)[0] == "no adhesion"  # no bonds late
+    with pytest.raises(ValueError, match="at least 3 frames"):
+        classify(t[:2], t[:2], t[:2], v_h)
