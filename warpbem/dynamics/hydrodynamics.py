@@ -6,8 +6,8 @@ the state's own bodies, then one solve per load of the basis the stiff forces ar
 than the free bodies' 6 degrees of freedom each (a repulsive contact or two), else unit forces
 and torques on each free body (the grand mobility; tens of bonds).
 
-Reused (``reuse_tolerance = d > 0``, m): the rigid bodies' mobility depends on the
-configuration only, and changes slowly with it, while bond forces change fast. A snapshot holds
+Reused (``reuse_tolerance = d > 0``, m, for states whose interactions hold stiff forces:
+bonds): the rigid bodies' mobility depends on the configuration only, and changes slowly with it, while bond forces change fast. A snapshot holds
 the flow solve (no loads) and the grand mobility at the configuration snapped to a lattice of
 spacing d: free bodies' heights (and, with more than one body, their lateral positions) rounded
 to multiples of d; their orientations likewise in steps of d / outer radius, except for
@@ -105,9 +105,11 @@ class HydrodynamicSolves:
         self._snapshots: OrderedDict = OrderedDict()
         self.snapshots_solved = 0
 
-    def background(self, bodies, loads):
-        """(Motion of the flow and the explicit ``loads``, the snapshot used or None)."""
-        if self.tolerance > 0:
+    def background(self, bodies, loads, stiff: bool):
+        """(Motion of the flow and the explicit ``loads``, the snapshot used or None); snapshots
+        serve states with ``stiff`` forces only (bonds), so a free-stream pass, whose
+        configurations never repeat, costs one solve per state."""
+        if self.tolerance > 0 and stiff:
             snapshot = self._snapshot(bodies)
             flow, basis = snapshot
             u, w, f, t = basis.combine(self.body_coefficients(loads.force, loads.torque))

@@ -128,7 +128,8 @@ class Simulator:
         explicit = {x.name: loads for x in model.interactions
                     if (loads := x.explicit_loads(bodies, contacts)) is not None}
         total = sum(explicit.values(), Loads.zero(model.n_bodies))
-        background, snapshot = self.hydro.background(bodies, total)
+        stiff = any(x.reuses_mobility(state.parts[x.name]) for x in model.interactions if x.name in state.parts)
+        background, snapshot = self.hydro.background(bodies, total, stiff)
         hydro, implicit = self._implicit(state, bodies, contacts, background, snapshot, dt_plan)
         self._latest = Evaluation(model, state, contacts, dt_plan, explicit, hydro, implicit)
         return self._latest

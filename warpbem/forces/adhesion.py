@@ -44,6 +44,7 @@ from ..surfaces.gaps import WALL
 from .interaction import ImplicitCoordinates, Interaction
 
 BOLTZMANN = 1.380649e-23  # J/K
+APPROACH_MARGIN = 100e-9  # m: a cell approaches the wall far less than this in one step
 
 
 def _positive(name, value, allow_zero=False):
@@ -292,10 +293,26 @@ class Adhesion(Interaction):
         energy = np.repeat(0.5 * sigma * stretch**2 / 3.0, 3)
         return energy, (-sigma * stretch[:, None] * unit).ravel(), stiffness
 
+    @property
+    def reach(self) -> float:
+        """Height (m) of a tip above the wall beyond which formation is below 1e-6 of k_f0:
+        lambda + ligand layer + the deviation where eq. 4.2 falls to that (sigma d^2 / 2 kT ~ ln 1e6)."""
+        deviation = np.sqrt(2.0 * self.thermal_energy * np.log(1e6) / self.spring_constant) + self.reactive_compliance
+        return self.equilibrium_length + self.ligand_layer + deviation
+
+    def reuses_mobility(self, part) -> bool:
+        return bool(np.any(part["receptor"] >= 0))
+
     def longest_step(self, bodies, contacts, part):
-        """k dt <= kinetics_fraction for the fastest formation and the fastest rupture at this state."""
-        rates = [self.fastest_formation, self.off_rate]
+        """k dt <= kinetics_fraction for the fastest formation and the fastest rupture at this
+        state; no limit while no cell has a bond or a tip within reach (with a margin of
+        APPROACH_MARGIN for the approach over one step)."""
         rows = np.flatnonzero(part["receptor"] >= 0)
+        if not len(rows):
+            lowest = min(contacts.gap(int(b), WALL).distance for b in self.cells) - self.roughness
+            if lowest > self.reach + APPROACH_MARGIN:
+                return np.inf
+        rates = [self.fastest_formation, self.off_rate]
         if len(rows):
             vector = self.geometry(self._table(part), self._frame(bodies, contacts, part))[0].numpy()[rows]
             rates.append(self.rupture_rate(self.tension(np.linalg.norm(vector, axis=1))).max())

@@ -110,6 +110,11 @@ class Interaction:
         """The longest step (s) this interaction allows from this state."""
         return np.inf
 
+    def reuses_mobility(self, part) -> bool:
+        """Whether this state holds stiff forces that make mobility snapshots worth their cost
+        (``dynamics/hydrodynamics.py``): the bonds of a rolling cell, not a free-stream pass."""
+        return False
+
     def state_columns(self) -> dict:
         return {}
 
