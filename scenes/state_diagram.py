@@ -1,0 +1,85 @@
+"""The adhesion state diagram from the runs of ``scenes/state_diagram.toml`` (Chang, Tees &
+Hammer 2000, PNAS 97:11262): each run classified from its trajectory by the documented rule of
+``warpbem/app/adhesion_states.py`` and drawn on the (reactive compliance, unstressed off-rate)
+plane, with the mean velocity over the last half of the run as a fraction of the free one.
+
+    warpbem sweep scenes/state_diagram.toml --output-dir results/state_diagram --workers 2
+    python scenes/state_diagram.py [--runs results/state_diagram]
+
+Writes <runs>/states.csv and <runs>/state_diagram.png.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from warpbem.app.adhesion_states import STATES, classify
+
+HERE = Path(__file__).resolve().parent
+
+
+def states(runs: Path) -> list[dict]:
+    rows = []
+    for path in sorted(runs.glob("point*.h5")):
+        with h5py.File(path) as f:
+            scene = json.loads(f.attrs["scene"])
+            t, x = f["time"][:], f["position"][:, 0, 0]
+            bonds, u0 = f["bond_count"][:, 0], f["velocity"][0, 0, 0]
+            complete = t[-1] >= scene["time"]["end"] * (1 - 1e-9)
+        state, ratio = classify(t, x, bonds, u0)
+        rows.append(dict(point=path.stem, off_rate=scene["adhesion"]["off_rate"],
+                         reactive_compliance=scene["adhesion"]["reactive_compliance"], state=state,
+                         velocity_ratio=ratio, bonds_end=int(bonds[-1]), complete=complete))
+    return rows
+
+
+def chart(rows, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    marks = {"no adhesion": ("o", "white"), "rolling": ("s", "C1"), "firm adhesion": ("D", "C0")}
+    fig, ax = plt.subplots(figsize=(6.5, 5))
+    for state in STATES:
+        chosen = [r for r in rows if r["state"] == state]
+        if chosen:
+            ax.scatter([r["reactive_compliance"] * 1e10 for r in chosen], [r["off_rate"] for r in chosen], s=160,
+                       marker=marks[state][0], facecolor=marks[state][1], edgecolor="k", label=state)
+    for r in rows:
+        ax.annotate(f"{r['velocity_ratio']:.2g}", (r["reactive_compliance"] * 1e10, r["off_rate"]),
+                    textcoords="offset points", xytext=(9, 6), fontsize=7)
+    ax.set(xscale="log", yscale="log", xlabel="reactive compliance r0 [A]", ylabel="unstressed off-rate k_r0 [1/s]",
+           title="adhesion state diagram (labels: V / V_free, last half)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    return path
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--runs", type=Path, default=HERE.parent / "results" / "state_diagram")
+    args = parser.parse_args()
+    rows = states(args.runs)
+    if not rows:
+        raise SystemExit(f"no runs in {args.runs}: warpbem sweep scenes/state_diagram.toml --output-dir {args.runs}")
+    with (args.runs / "states.csv").open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    for r in rows:
+        print(f"k_r0 = {r['off_rate']:g} /s  r0 = {r['reactive_compliance'] * 1e10:.2g} A  {r['state']:14s}"
+              f"  V/V_free = {r['velocity_ratio']:.3g}  bonds {r['bonds_end']}{'' if r['complete'] else '  (partial)'}")
+    print("chart:", chart(rows, args.runs / "state_diagram.png"))
+
+
+if __name__ == "__main__":
+    main()
