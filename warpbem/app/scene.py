@@ -24,7 +24,9 @@ viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
                                 default 1e-8 for float64, 1e-6 for float32), dtype = "float64",
                                 refine_fixed_at_wall = true, reuse_tolerance (m; mobility
                                 snapshots reused across steps, dynamics/hydrodynamics.py;
-                                default 0, with adhesion on ADHESION_REUSE_TOLERANCE)
+                                default 0, with adhesion on ADHESION_REUSE_TOLERANCE),
+                                reuse_lateral (m; their lateral lattice with several bodies,
+                                default 50 x reuse_tolerance)
     [[bodies]]                  name, position = [x, y, z], orientation = [w, x, y, z],
                                 fixed = false, density = 1000.0, force = [0, 0, 0] (N),
                                 torque = [0, 0, 0] (N m) on free bodies, adhesive = true (free
@@ -189,7 +191,8 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
     time = _table("time", table["time"], {"end", "dt_max", "dt_min", "contact_gap", "scheme", "frame_every",
                                           "frame_interval"}, ("end",))
     solver = _table("solver", table.get("solver", {}), {"quadrature_order", "contact_refinement", "tolerance",
-                                                        "refine_fixed_at_wall", "dtype", "reuse_tolerance"})
+                                                        "refine_fixed_at_wall", "dtype", "reuse_tolerance",
+                                                        "reuse_lateral"})
     if not isinstance(table["bodies"], list) or not table["bodies"]:
         raise SceneError("bodies: expected at least one [[bodies]] entry")
     bodies = []
@@ -254,7 +257,9 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
             refine_fixed_at_wall=_bool("solver.refine_fixed_at_wall", solver.get("refine_fixed_at_wall", True)),
             tolerance=None if tolerance is None else _number("solver.tolerance", tolerance, 0, 0.1, low_open=True),
             dtype=_choice("solver.dtype", solver.get("dtype", "float64"), ("float64", "float32")),
-            reuse_tolerance=reuse),
+            reuse_tolerance=reuse,
+            reuse_lateral=(None if "reuse_lateral" not in solver else
+                           _number("solver.reuse_lateral", solver["reuse_lateral"], 0, 1e-5, low_open=True))),
         policy=StepPolicy(dt_max, dt_min,
                           _number("time.contact_gap", time.get("contact_gap", 5e-7), 0, 1e-2, low_open=True)),
         scheme=scheme)

@@ -8,10 +8,12 @@ and torques on each free body (the grand mobility; tens of bonds).
 
 Reused (``reuse_tolerance = d > 0``, m, for states whose interactions hold stiff forces:
 bonds): the rigid bodies' mobility depends on the configuration only, and changes slowly with it, while bond forces change fast. A snapshot holds
-the flow solve (no loads) and the grand mobility at the configuration snapped to a lattice of
-spacing d: free bodies' heights (and, with more than one body, their lateral positions) rounded
-to multiples of d; their orientations likewise in steps of d / outer radius, except for
-spheres, whose mobility does not depend on it. A lone body above the wall in shear
+the flow solve (no loads) and the grand mobility at the configuration snapped to a lattice:
+free bodies' heights rounded to multiples of d, their orientations likewise in steps of d /
+outer radius (except for spheres, whose mobility does not depend on it) and, with more than
+one body, their lateral positions to multiples of ``reuse_lateral`` (default 50 d): a cell's
+mobility changes with its height over the gap to the wall (0.2 um when rolling), with another
+cell's position only over their distance (microns). A lone body above the wall in shear
 (u = gdot z e_x) is invariant under translation along the wall, so its snapshots are keyed by
 height alone and computed at x = y = 0. The background for any explicit loads and the stiff
 forces follow from a snapshot by linearity, so a step costs no solve while the cells stay within
@@ -100,6 +102,7 @@ class HydrodynamicSolves:
         self.model = model
         self.solver = solver
         self.tolerance = model.solver.reuse_tolerance
+        self.lateral = model.solver.reuse_lateral or 50.0 * self.tolerance
         self.spherical = [is_spherical(m) for m in model.meshes]
         self.free = np.flatnonzero(~model.fixed_mask)
         self._snapshots: OrderedDict = OrderedDict()
@@ -194,8 +197,9 @@ class HydrodynamicSolves:
             if b.fixed:
                 snapped.append(b)
                 continue
-            cell = np.round(b.position / d)
-            position = np.array([0.0, 0.0, cell[2] * d]) if alone else cell * d
+            spacing = np.array([self.lateral, self.lateral, d])
+            cell = np.round(b.position / spacing)
+            position = np.array([0.0, 0.0, cell[2] * d]) if alone else cell * spacing
             entry = (cell[2],) if alone else tuple(cell)
             orientation = np.array([1.0, 0.0, 0.0, 0.0])
             if not self.spherical[i]:
