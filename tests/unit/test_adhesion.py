@@ -233,3 +233,36 @@ def test_adhesion_states_follow_the_documented_rule():
     assert classify(t, stopped_then_released, np.where(t < 0.5, 3, 0), v_h)[0] == "no adhesion"  # no bonds late
     with pytest.raises(ValueError, match="at least 3 frames"):
         classify(t[:2], t[:2], t[:2], v_h)
+
+
+# thesis ch. 4.3 (Table 4.1 and the figure captions): scene, spring constant (N/m), cases as
+# (shear modulus Pa or None for rigid, radius m), cap, compression options
+THESIS_CH4 = [
+    ("fig4_04_06_stiff_bonds", 0.1, {(508.0, 5e-6), (1000.0, 5e-6), (None, 5e-6)}, 200, {False}),
+    ("fig4_09_11_soft_bonds", 5e-4, {(4e3, 5e-6), (1e4, 5e-6), (4e3, 4e-6)}, 200, {False}),
+    ("fig4_12_14_bond_cap", 5e-4, {(8e3, 3e-6)}, 40, {False, True}),
+]
+
+
+@pytest.mark.parametrize("name, sigma, cells, cap, compression", THESIS_CH4)
+def test_thesis_ch4_scenes_use_table_4_1(name, sigma, cells, cap, compression):
+    from pathlib import Path
+
+    from warpbem.app.sweep import grid
+
+    path = Path(__file__).resolve().parents[2] / "scenes" / f"{name}.toml"
+    seen, options = set(), set()
+    for _, overrides in grid([], scene.load(path).sweep):
+        s = scene.load(path, overrides)
+        bonds = s.model.interaction("bond")
+        assert (bonds.spring_constant, bonds.equilibrium_length, bonds.off_rate, bonds.reactive_compliance,
+                bonds.on_rate, bonds.receptor_density, bonds.roughness) == (sigma, 30e-9, 2.4, 0.39e-10, 365.0,
+                                                                           20e12, 175e-9)
+        assert bonds.max_bonds == cap and bonds.poisson_ratio[0] == 0.33
+        assert s.model.flow.shear_rate == 100.0 and s.model.flow.viscosity == 1e-3
+        modulus = bonds.shear_modulus[0]
+        seen.add((None if modulus >= 1e12 else modulus, round(bonds.radius[0], 7)))
+        options.add(bonds.compression)
+        gap = s.bodies[0].position[2] - s.bodies[0].mesh.size()
+        assert 230e-9 < gap < 250e-9  # released where gravity and eq. 3.1 balance (236 nm)
+    assert seen == {(g, round(r, 7)) for g, r in cells} and options == compression
