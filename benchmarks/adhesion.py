@@ -7,6 +7,8 @@
    um, sigma = 0.5 dyn/cm, G = 4 kPa, 100 1/s), solved at every state (the reference) and
    from snapshots on lattices of 0.5 - 20 nm, same seed and steps: the error of the distance
    rolled before arrest, of the velocity history and of the bond count, against the speed-up;
+   and (2b) the change of two cells' grand mobility when one moves along the flow by 12.5 -
+   200 nm, the error of a lateral lattice of twice that;
 3. the step: kinetics_fraction (k dt per step) from 0.4 to 0.025, 8 seeds each: mean distance
    to arrest and bonds at the end, against the cost;
 4. wall time per simulated second of one rolling cell (k = 4, the scene defaults) and of four
@@ -130,6 +132,31 @@ def reuse_chart(device, tolerances, end):
     return rows
 
 
+def lateral_error(device, spacing, shifts):
+    """Relative change of two rolling cells' grand mobility (and flow motion) when one moves
+    along the flow by each shift: the error of a lateral snapshot lattice of twice that."""
+    mesh = wb.mesh.sphere(A, 3)
+    model = Model([mesh, mesh], [False, False], Flow(100.0, 1e-3), solver=SolverOptions())
+    from warpbem.dynamics.hydrodynamics import HydrodynamicSolves
+
+    hydro = HydrodynamicSolves(model, model.solver.build(model.flow, device))
+
+    def mobility(shift):
+        bodies = [Body(mesh, position=(0.0, 0.0, REST)), Body(mesh, position=(spacing + shift, 0.0, REST))]
+        flow = hydro.solver.solve(bodies)
+        grand = hydro._grand_mobility(bodies).quadratic()
+        return grand, np.concatenate([flow.velocity.ravel(), flow.angular_velocity.ravel() * A])
+
+    grand0, flow0 = mobility(0.0)
+    rows = []
+    for shift in shifts:
+        grand, flow = mobility(shift)
+        rows.append(dict(spacing_um=spacing * 1e6, shift_nm=shift * 1e9,
+                         grand_mobility_change=np.abs(grand - grand0).max() / np.abs(grand0).max(),
+                         flow_motion_change=np.abs(flow - flow0).max() / np.abs(flow0).max()))
+    return rows
+
+
 def step_chart(device, fractions, seeds, end):
     rows = []
     for f in fractions:
@@ -199,6 +226,11 @@ def main():
                              0.005 if q else 0.02)
     print_table(reuse_rows)
     write_csv("adhesion_reuse.csv", reuse_rows)
+    print("\n2b. lateral lattice: two cells 12 um apart, one moved along the flow")
+    lateral_rows = lateral_error(args.device, 12e-6, [25e-9, 50e-9, 100e-9] if q else [12.5e-9, 25e-9, 50e-9,
+                                                                                       100e-9, 200e-9])
+    print_table(lateral_rows)
+    write_csv("adhesion_lateral.csv", lateral_rows)
     print("\n3. step (kinetics fraction; reuse 2 nm)")
     step_rows = step_chart(args.device, [0.4, 0.1, 0.025] if q else [0.4, 0.2, 0.1, 0.05, 0.025], 2 if q else 8,
                            0.005 if q else 0.03)

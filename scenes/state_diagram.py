@@ -17,7 +17,6 @@ import json
 from pathlib import Path
 
 import h5py
-import numpy as np
 
 from warpbem.app.adhesion_states import STATES, classify
 

@@ -34,6 +34,7 @@ from .implicit import ImplicitSolveError, ImplicitSystem
 from .model import Model
 from .state import State
 
+
 @dataclass(frozen=True)
 class Implicit:
     """The implicit interactions at a state: their coordinates (concatenated; ``owners``: which
