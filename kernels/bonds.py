@@ -6,7 +6,8 @@ Layout. Receptors are microvillus tips fixed on the cells (``tips``: body-frame 
 reference point, ``receptor_body``); the receptors of adhesive body c are
 ``receptor_start[c] .. receptor_start[c + 1]``, and its bond slots rows
 ``c * capacity .. (c + 1) * capacity`` of the table (``bond_receptor``: -1 for a free slot,
-``bond_anchor``: the ligand's point on the wall, ``bond_birth``: time of formation). One thread
+``bond_anchor``: the ligand's point, ``bond_partner``: -1 for the wall, else the fixed body
+whose surface carries the ligand, ``bond_birth``: time of formation). One thread
 per cell sums its own rows in row order, so the reductions are deterministic on CPU and CUDA
 alike (no float atomics).
 
@@ -128,11 +129,16 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
                   patch_centre: wp.array(dtype=vec3), patch_radius: wp.array(dtype=dtype),
                   curvature: wp.array(dtype=dtype), rest: dtype, layer: dtype, spring_per_kt: dtype,
                   compliance: dtype, on_rate: dtype, dt: dtype, seed: int, draw: int,
-                  candidate: wp.array(dtype=int), anchor: wp.array(dtype=vec3), offset: wp.array(dtype=dtype)):
+                  cell_anchor: wp.array(dtype=vec3), cell_deviation: wp.array(dtype=dtype),
+                  cell_partner: wp.array(dtype=int),
+                  candidate: wp.array(dtype=int), anchor: wp.array(dtype=vec3), offset: wp.array(dtype=dtype),
+                  partner: wp.array(dtype=int)):
         """Formation (eq. 4.2): k_f = k_f0 exp(sigma |d| (r0 - |d| / 2) / kT), d the deviation from
         the rest length of the best ligand within reach. Ligands in excess fill the substrate
         layer 0 <= z <= ``layer`` (its roughness), so a tip at height z finds one straight below
-        at z - lambda, clamped to the layer; formed with 1 - exp(-k_f dt)."""
+        at z - lambda, clamped to the layer; or, if closer to its rest length, the best ligand on a
+        ligand-bearing fixed cell (``cell_anchor``, ``cell_deviation``, ``cell_partner``: the
+        body, -1 for none; found by ``closest_to_points``); formed with 1 - exp(-k_f dt)."""
         r = wp.tid()
         candidate[r] = 0
         if bound[r] != 0:
@@ -145,17 +151,27 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
         tip = tip + vec3(zero, zero, lowering)
         height = wp.clamp(tip[2] - rest, zero, layer)
         d = wp.abs(tip[2] - height - rest)
+        on_cell = cell_partner[r] >= 0 and wp.abs(cell_deviation[r]) < d
+        if on_cell:
+            d = wp.abs(cell_deviation[r])
         rate = on_rate * wp.exp(spring_per_kt * d * (compliance - half * d))
         if uniform(seed, draw, r) < one - wp.exp(-rate * dt):
             candidate[r] = 1
-            anchor[r] = vec3(tip[0], tip[1], height)
-            offset[r] = lowering
+            if on_cell:
+                anchor[r] = cell_anchor[r]
+                offset[r] = zero
+                partner[r] = cell_partner[r]
+            else:
+                anchor[r] = vec3(tip[0], tip[1], height)
+                offset[r] = lowering
+                partner[r] = -1
 
     @wp.kernel(enable_backward=False)
     def insert(candidate: wp.array(dtype=int), anchor: wp.array(dtype=vec3), offset: wp.array(dtype=dtype),
-               receptor_start: wp.array(dtype=int), capacity: int, time: dtype,
+               partner: wp.array(dtype=int), receptor_start: wp.array(dtype=int), capacity: int, time: dtype,
                bond_receptor: wp.array(dtype=int), bond_anchor: wp.array(dtype=vec3),
-               bond_offset: wp.array(dtype=dtype), bond_birth: wp.array(dtype=dtype), bound: wp.array(dtype=int)):
+               bond_offset: wp.array(dtype=dtype), bond_partner: wp.array(dtype=int),
+               bond_birth: wp.array(dtype=dtype), bound: wp.array(dtype=int)):
         """New bonds into each cell's free rows, receptors in index order, up to ``capacity``
         bonds per cell (the cap of thesis figs. 4.12-4.14: the rest are refused)."""
         c = wp.tid()
@@ -169,6 +185,7 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
                     bond_receptor[row] = r
                     bond_anchor[row] = anchor[r]
                     bond_offset[row] = offset[r]
+                    bond_partner[row] = partner[r]
                     bond_birth[row] = time
                     bound[r] = 1
 

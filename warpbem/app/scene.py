@@ -16,7 +16,9 @@ viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
                                 max_bonds = 100 (per cell), compression = false, seed = 0,
                                 roughness (tips; default: repulsion.cell_roughness),
                                 ligand_layer (default: repulsion.wall_roughness),
-                                kinetics_fraction = 0.1 (the step keeps k dt below it)
+                                kinetics_fraction = 0.1 (the step keeps k dt below it),
+                                cell_ligand_layer (ligands on adherent cells; default:
+                                repulsion.cell_roughness)
     [time]                      end = 0.01, dt_max = 1e-4, dt_min = 1e-5, contact_gap = 5e-7,
                                 scheme = "heun", and frames by steps, frame_every = 1, or by
                                 time, frame_interval = 1e-3 (s; the steps land on frame times)
@@ -31,7 +33,8 @@ viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
                                 fixed = false, density = 1000.0, force = [0, 0, 0] (N),
                                 torque = [0, 0, 0] (N m) on free bodies, adhesive = true (free
                                 bodies with adhesion on), shear_modulus (Pa; none: rigid, no
-                                Hertz patch), poisson_ratio = 0.33, and a mesh:
+                                Hertz patch), poisson_ratio = 0.33, ligands = false (fixed
+                                bodies: free cells can bind to them), and a mesh:
     [bodies.mesh]               shape = "sphere" (radius, subdivisions) | "spheroid" (radius,
                                 aspect_ratio, subdivisions) | "file" (path, relative to the scene)
 
@@ -63,7 +66,7 @@ from ..surfaces.placement import PlacementError, check_placement
 ADHESION_REUSE_TOLERANCE = 2e-9  # m: chosen from benchmarks/adhesion.py (README: adhesion)
 ADHESION_KEYS = {"receptor_density", "ligand_density", "spring_constant", "equilibrium_length", "off_rate",
                  "reactive_compliance", "on_rate", "temperature", "max_bonds", "compression", "seed", "roughness",
-                 "ligand_layer", "kinetics_fraction"}
+                 "ligand_layer", "kinetics_fraction", "cell_ligand_layer"}
 
 
 class SceneError(ValueError):
@@ -119,6 +122,7 @@ class BodySpec(NamedTuple):
     adhesive: bool
     shear_modulus: float | None
     poisson_ratio: float
+    ligands: bool
 
 
 @dataclass(frozen=True)
@@ -199,7 +203,7 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
     for i, spec in enumerate(table["bodies"]):
         where = f"bodies.{i}"
         _table(where, spec, {"name", "mesh", "position", "orientation", "fixed", "density", "force", "torque",
-                             "adhesive", "shear_modulus", "poisson_ratio"}, ("mesh", "position"))
+                             "adhesive", "shear_modulus", "poisson_ratio", "ligands"}, ("mesh", "position"))
         bodies.append(BodySpec(str(spec.get("name", f"body{i}")), _mesh(f"{where}.mesh", spec["mesh"], folder),
                                _vector(f"{where}.position", spec["position"], 3),
                                _vector(f"{where}.orientation", spec.get("orientation", [1.0, 0, 0, 0]), 4),
@@ -210,7 +214,10 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
                                _bool(f"{where}.adhesive", spec.get("adhesive", True)),
                                None if "shear_modulus" not in spec else
                                _number(f"{where}.shear_modulus", spec["shear_modulus"], 0, 1e12, low_open=True),
-                               _poisson(f"{where}.poisson_ratio", spec.get("poisson_ratio", 0.33))))
+                               _poisson(f"{where}.poisson_ratio", spec.get("poisson_ratio", 0.33)),
+                               _bool(f"{where}.ligands", spec.get("ligands", False))))
+        if bodies[-1].ligands and not bodies[-1].fixed:
+            raise SceneError(f"{where}.ligands: ligands are modelled on fixed (adherent) cells only")
         if bodies[-1].fixed and (any(bodies[-1].force) or any(bodies[-1].torque)):
             raise SceneError(f"{where}.force: body {i} is fixed; its load is what holds it (an output), so give"
                              " force and torque for free bodies only")
@@ -301,7 +308,10 @@ def _adhesion(table, bodies, repulsion: Repulsion, dt_min: float, wall: bool) ->
             roughness=_number("adhesion.roughness", get("roughness", repulsion.cell_roughness), 0, 1e-5),
             ligand_layer=_number("adhesion.ligand_layer", get("ligand_layer", repulsion.wall_roughness), 0, 1e-5),
             kinetics_fraction=_number("adhesion.kinetics_fraction", get("kinetics_fraction", 0.1), 0, 1, low_open=True),
-            shear_modulus=[b.shear_modulus for b in bodies], poisson_ratio=[b.poisson_ratio for b in bodies])
+            shear_modulus=[b.shear_modulus for b in bodies], poisson_ratio=[b.poisson_ratio for b in bodies],
+            ligand_bodies=[b.ligands for b in bodies],
+            cell_ligand_layer=_number("adhesion.cell_ligand_layer", get("cell_ligand_layer", repulsion.cell_roughness),
+                                      0, 1e-5))
     except ValueError as err:
         raise SceneError(f"adhesion: {err}") from err
     # the step is bounded by the kinetics, k dt <= kinetics_fraction; dt_min must allow it

@@ -7,7 +7,13 @@ Model, written down (SI):
 * Receptors sit at microvillus tips, ``roughness`` (175 nm, Table 4.1) out along the outward
   normal from the surface of each adhesive free cell, placed uniformly by area with density
   ``receptor_density`` (1/m^2) from the seed (a 5 um cell at 20 /um^2 has 6283).
-* Ligands are in excess in the substrate layer 0 <= z <= ``ligand_layer`` (its roughness, 50 nm):
+* Ligands are in excess in the substrate layer 0 <= z <= ``ligand_layer`` (its roughness, 50 nm)
+  and, as an option, on fixed (adherent) cells (``ligand_bodies``), in the layer of their
+  microvilli (``cell_ligand_layer``, 175 nm) above their surface, so a free cell can bind to an
+  adherent one: a tip at distance r from that surface (exact closest point, Newton's method on
+  the QUAD9 element) binds to one at r - lambda along the line to it, clamped to the layer; a
+  bond to a cell pulls that cell back (its holding load carries the reaction).
+  On the wall:
   a free receptor whose tip is at height z binds to one straight below at z - lambda, clamped
   to the layer, so the bond forms at its rest length lambda wherever the tip is within
   lambda .. lambda + layer of the wall, and stretched or compressed by the distance beyond.
@@ -40,7 +46,7 @@ import numpy as np
 
 from .. import runtime
 from ..surfaces import quad9
-from ..surfaces.gaps import WALL
+from ..surfaces.gaps import WALL, bounding_spheres
 from .interaction import ImplicitCoordinates, Interaction
 
 BOLTZMANN = 1.380649e-23  # J/K
@@ -98,7 +104,7 @@ class Adhesion(Interaction):
     def __init__(self, meshes, fixed, *, receptor_density, spring_constant, equilibrium_length, off_rate,
                  reactive_compliance, on_rate, temperature=310.0, max_bonds=100, compression=False, seed=0,
                  ligand_density=None, roughness=175e-9, ligand_layer=50e-9, shear_modulus=None,
-                 poisson_ratio=None, kinetics_fraction=0.1, adhesive=None):
+                 poisson_ratio=None, kinetics_fraction=0.1, adhesive=None, ligand_bodies=None, cell_ligand_layer=None):
         n = len(meshes)
         self.receptor_density = _positive("receptor_density", receptor_density)
         self.ligand_density = None if ligand_density is None else _positive("ligand_density", ligand_density)
@@ -123,6 +129,13 @@ class Adhesion(Interaction):
         self.cells = np.flatnonzero(adhesive)  # adhesive free bodies, in body order
         if not len(self.cells):
             raise ValueError("adhesion needs at least one adhesive free body")
+        carriers = np.zeros(n, dtype=bool) if ligand_bodies is None else np.asarray(ligand_bodies, dtype=bool)
+        if carriers.shape != (n,) or np.any(carriers & ~fixed):
+            raise ValueError("ligand_bodies must mark fixed bodies only (one flag per body): ligands on a moving"
+                             " cell are not modelled")
+        self.ligand_bodies = np.flatnonzero(carriers)
+        self.cell_ligand_layer = self.roughness if cell_ligand_layer is None else _positive(
+            "cell_ligand_layer", cell_ligand_layer, allow_zero=True)
         modulus = np.zeros(n) if shear_modulus is None else np.array(
             [0.0 if g is None else g for g in shear_modulus], dtype=float)
         ratio = np.full(n, 0.33) if poisson_ratio is None else np.array(
@@ -187,6 +200,10 @@ class Adhesion(Interaction):
         self._receptor_body = wp.array(self.receptor_body, dtype=int, device=self.device)
         self._receptor_start = wp.array(self.receptor_start, dtype=int, device=self.device)
         self._curvature = wp.array(self.radius + self.roughness, dtype=wp.float64, device=self.device)
+        if len(self.ligand_bodies):
+            from ..kernels.contact import build_contact_kernels
+
+            self.contact = build_contact_kernels(wp.float64)
 
     def _frame(self, bodies, contacts, part):
         """Device arrays of the configuration: positions, rotations, patch centres and radii."""
@@ -240,7 +257,8 @@ class Adhesion(Interaction):
     def state_columns(self):
         c, n = self.capacity, self.n_bodies
         return {"receptor": ("1 (receptor index, -1: free row)", (c,)), "anchor": ("m", (c, 3)),
-                "offset": ("m", (c,)), "birth": ("s", (c,)), "count": ("1", (n,)), "contact_radius": ("m", (n,)),
+                "offset": ("m", (c,)), "partner": ("1 (-1: the wall, else the body carrying the ligand)", (c,)),
+                "birth": ("s", (c,)), "count": ("1", (n,)), "contact_radius": ("m", (n,)),
                 "contact_force": ("N", (n,)), "draws": ("1", ())}
 
     def derived_columns(self):
@@ -254,7 +272,8 @@ class Adhesion(Interaction):
 
     def initial_state(self, bodies):
         c, n = self.capacity, self.n_bodies
-        return {"receptor": np.full(c, -1.0), "anchor": np.zeros((c, 3)), "offset": np.zeros(c), "birth": np.zeros(c),
+        return {"receptor": np.full(c, -1.0), "anchor": np.zeros((c, 3)), "offset": np.zeros(c),
+                "partner": np.full(c, -1.0), "birth": np.zeros(c),
                 "count": np.zeros(n), "contact_radius": np.zeros(n), "contact_force": np.zeros(n),
                 "draws": np.array(0.0)}
 
@@ -273,6 +292,16 @@ class Adhesion(Interaction):
         for i in range(3):
             unit_force[i::3][np.arange(len(rows)), body, i] = 1.0
             unit_torque[i::3][np.arange(len(rows)), body] = moment[:, :, i]  # arm x e_i
+        partner = part["partner"][rows].astype(int)
+        on_cell = np.flatnonzero(partner >= 0)
+        if len(on_cell):  # the reaction on the cell that carries the ligand, at the anchor
+            anchors = part["anchor"][rows[on_cell]]
+            arm = anchors - np.array([bodies[p].position for p in partner[on_cell]])
+            for i in range(3):
+                e = np.zeros(3)
+                e[i] = 1.0
+                unit_force[i::3][on_cell, partner[on_cell], i] = -1.0
+                unit_torque[i::3][on_cell, partner[on_cell]] = -np.cross(arm, e)
         return ImplicitCoordinates(vector.ravel(), unit_force, unit_torque)
 
     def law(self, s):
@@ -300,6 +329,52 @@ class Adhesion(Interaction):
         deviation = np.sqrt(2.0 * self.thermal_energy * np.log(1e6) / self.spring_constant) + self.reactive_compliance
         return self.equilibrium_length + self.ligand_layer + deviation
 
+    @property
+    def cell_reach(self) -> float:
+        """As ``reach``, from the surface of a ligand-bearing cell (its layer: its microvilli)."""
+        return self.reach - self.ligand_layer + self.cell_ligand_layer
+
+    def cell_ligands(self, bodies):
+        """Per receptor, the ligand on a ligand-bearing fixed cell nearest to its rest length:
+        (anchor (R, 3), deviation (R,) m, partner (R,) body or -1), from the exact closest point
+        of each candidate element (bounding spheres within ``cell_reach``) to the tip."""
+        n = len(self.tips)
+        anchor, deviation, partner = np.zeros((n, 3)), np.full(n, 1.0), np.full(n, -1, dtype=np.int32)
+        if len(self.ligand_bodies):
+            rotations = np.array([b.rotation() for b in bodies])[self.receptor_body]
+            tips = np.array([b.position for b in bodies])[self.receptor_body] + np.einsum("rij,rj->ri", rotations,
+                                                                                          self.tips)
+        for b in self.ligand_bodies:
+            elements = bodies[b].world_nodes()[bodies[b].mesh.elements]
+            centres, radii = bounding_spheres(elements)
+            near = np.flatnonzero(np.linalg.norm(tips - bodies[b].position, axis=1)
+                                  < np.linalg.norm(elements.reshape(-1, 3) - bodies[b].position, axis=1).max()
+                                  + self.cell_reach)
+            if not len(near):
+                continue
+            reach = np.linalg.norm(tips[near, None] - centres[None], axis=-1) - radii[None] < self.cell_reach
+            receptor, element = np.nonzero(reach)
+            if not len(receptor):
+                continue
+            wp = self.wp
+            points = wp.zeros(len(receptor), dtype=self.k.vec3, device=self.device)
+            wp.launch(self.contact.closest_to_points, dim=len(receptor), device=self.device, inputs=[
+                wp.array(elements.reshape(-1, 3), dtype=self.k.vec3, device=self.device),
+                wp.array(element.astype(np.int32), dtype=int, device=self.device),
+                wp.array(tips[near[receptor]], dtype=self.k.vec3, device=self.device)], outputs=[points])
+            # per candidate: distance r of the tip from the surface, the ligand at r - lambda
+            # (clamped to the layer) along the line to the closest point
+            points = points.numpy()
+            offset = tips[near[receptor]] - points
+            distance = np.linalg.norm(offset, axis=1)
+            height = np.clip(distance - self.equilibrium_length, 0.0, self.cell_ligand_layer)
+            dev = distance - height - self.equilibrium_length
+            for r, p, h, d, o, dist in zip(near[receptor], points, height, dev, offset, distance):
+                if abs(d) < abs(deviation[r]):
+                    deviation[r], partner[r] = d, b
+                    anchor[r] = p + h * o / dist
+        return anchor, deviation, partner
+
     def reuses_mobility(self, part) -> bool:
         return bool(np.any(part["receptor"] >= 0))
 
@@ -310,7 +385,9 @@ class Adhesion(Interaction):
         rows = np.flatnonzero(part["receptor"] >= 0)
         if not len(rows):
             lowest = min(contacts.gap(int(b), WALL).distance for b in self.cells) - self.roughness
-            if lowest > self.reach + APPROACH_MARGIN:
+            nearest = min([g.distance for g in contacts.within(self.cell_reach + self.roughness + APPROACH_MARGIN)
+                           if g.body in self.cells and g.other in self.ligand_bodies], default=np.inf) - self.roughness
+            if lowest > self.reach + APPROACH_MARGIN and nearest > self.cell_reach + APPROACH_MARGIN:
                 return np.inf
         rates = [self.fastest_formation, self.off_rate]
         if len(rows):
@@ -338,26 +415,33 @@ class Adhesion(Interaction):
         n_receptors = len(self.tips)
         bound = wp.zeros(n_receptors, dtype=int, device=self.device)
         wp.launch(k.mark_bound, dim=self.capacity, device=self.device, inputs=[receptor], outputs=[bound])
+        cell_anchor, cell_deviation, cell_partner = self.cell_ligands(end_bodies)
         candidate = wp.zeros(n_receptors, dtype=int, device=self.device)
         ligand = wp.zeros(n_receptors, dtype=k.vec3, device=self.device)
         lowering = wp.zeros(n_receptors, dtype=wp.float64, device=self.device)
+        chosen = wp.zeros(n_receptors, dtype=int, device=self.device)
         wp.launch(k.formation, dim=n_receptors, device=self.device,
                   inputs=[bound, self._tips, self._receptor_body, frame["positions"], frame["rotations"],
                           frame["patch_centre"], frame["patch_radius"], frame["curvature"], self.equilibrium_length,
                           self.ligand_layer, self.spring_constant / self.thermal_energy, self.reactive_compliance,
-                          self.effective_on_rate, dt, self.seed, 2 * draw + 1],
-                  outputs=[candidate, ligand, lowering])
+                          self.effective_on_rate, dt, self.seed, 2 * draw + 1,
+                          wp.array(cell_anchor, dtype=k.vec3, device=self.device),
+                          wp.array(cell_deviation, dtype=wp.float64, device=self.device),
+                          wp.array(cell_partner, dtype=int, device=self.device)],
+                  outputs=[candidate, ligand, lowering, chosen])
+        partner = wp.array(part["partner"].astype(np.int32), dtype=int, device=self.device)
         wp.launch(k.insert, dim=len(self.cells), device=self.device,
-                  inputs=[candidate, ligand, lowering, self._receptor_start, self.max_bonds, end_time],
-                  outputs=[receptor, anchor, offset, birth, bound])
+                  inputs=[candidate, ligand, lowering, chosen, self._receptor_start, self.max_bonds, end_time],
+                  outputs=[receptor, anchor, offset, partner, birth, bound])
         vector, moment = self.geometry(table, frame)
-        force, _, count = self.reduce(receptor, moment, self.tip_forces(vector.numpy()))
+        on_wall = (partner.numpy() < 0)[:, None]
+        force, _, count = self.reduce(receptor, moment, self.tip_forces(vector.numpy()) * on_wall)
         normal, counts = np.zeros(self.n_bodies), np.zeros(self.n_bodies)
-        normal[self.cells] = np.maximum(-force[:, 2], 0.0)
+        normal[self.cells] = np.maximum(-force[:, 2], 0.0)  # the Hertz load: the wall's bonds only
         counts[self.cells] = count
         compliant = self.shear_modulus > 0
         radius = np.where(compliant, hertz_contact_radius(normal, self.radius, np.where(compliant, self.shear_modulus,
                                                                                           1.0), self.poisson_ratio), 0.0)
         return {"receptor": receptor.numpy().astype(float), "anchor": anchor.numpy().astype(float),
-                "offset": offset.numpy(), "birth": birth.numpy(), "count": counts, "contact_radius": radius,
+                "offset": offset.numpy(), "partner": partner.numpy().astype(float), "birth": birth.numpy(), "count": counts, "contact_radius": radius,
                 "contact_force": normal, "draws": np.array(float(draw + 1))}

@@ -33,7 +33,8 @@ class Gap:
     normal: np.ndarray
 
 
-def _spheres(element_nodes):
+def bounding_spheres(element_nodes):
+    """Centre nodes (E, 3) and radii (E,) of spheres that hold each element (BOUND_FACTOR)."""
     centres = element_nodes[:, 8]
     radii = BOUND_FACTOR * np.linalg.norm(element_nodes - centres[:, None], axis=-1).max(axis=1)
     return centres, radii
@@ -90,7 +91,7 @@ class GapFinder:
     def between(self, bodies, i: int, j: int) -> Gap:
         """Closest approach of body i to body j, or to the wall z = 0 when j is WALL."""
         nodes_i = bodies[i].world_nodes()[bodies[i].mesh.elements]
-        centres_i, radii_i = _spheres(nodes_i)
+        centres_i, radii_i = bounding_spheres(nodes_i)
         if j == WALL:
             upper = centres_i[:, 2].min()
             candidates = np.flatnonzero(centres_i[:, 2] - radii_i <= upper)
@@ -98,7 +99,7 @@ class GapFinder:
             best = int(np.argmin(pa[:, 2]))
             return Gap(i, WALL, float(pa[best, 2]), pa[best], pb[best], np.array([0.0, 0.0, 1.0]))
         nodes_j = bodies[j].world_nodes()[bodies[j].mesh.elements]
-        centres_j, radii_j = _spheres(nodes_j)
+        centres_j, radii_j = bounding_spheres(nodes_j)
         centre_distance = np.linalg.norm(centres_i[:, None] - centres_j[None], axis=-1)
         lower = centre_distance - radii_i[:, None] - radii_j[None]
         ea, eb = np.nonzero(lower <= centre_distance.min())
