@@ -163,7 +163,8 @@ def step_chart(device, fractions, seeds, end):
         runs = [roll(*rolling_model(fraction=f, seed=s, dt_max=1.0), end, device) for s in range(seeds)]
         rolled = np.array([r["x"][0] for r in runs]) * 1e6
         bonds = np.array([r["bonds"][-1] for r in runs])
-        rows.append(dict(kinetics_fraction=f, dt_s=np.mean([np.diff(r["t"]).mean() for r in runs]), wall_s=np.mean([r["wall"] for r in runs]),
+        rows.append(dict(kinetics_fraction=f, dt_s=np.mean([np.diff(r["t"]).mean() for r in runs]),
+                         wall_s=np.mean([r["wall"] for r in runs]),
                          rolled_um=rolled.mean(), rolled_se=rolled.std(ddof=1) / np.sqrt(seeds),
                          bonds_end=bonds.mean(), bonds_se=bonds.std(ddof=1) / np.sqrt(seeds)))
     ref = rows[-1]
@@ -214,33 +215,41 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="smaller sizes and shorter runs")
     parser.add_argument("--device", default="cpu")
+    parser.add_argument("--parts", default="kernels,reuse,step,speed",
+                        help="comma-separated parts to run: kernels, reuse (with the lateral lattice), step, speed")
     args = parser.parse_args()
+    parts = set(args.parts.split(","))
     q = args.quick
     sizes = [(10, 100), (100, 100)] if q else [(10, 100), (100, 100), (1000, 100)]
-    rows, t_solve = kernel_throughput(args.device, sizes)
-    print(f"\n1. bond kernels on {args.device} (one solve of a k = 4 cell near the wall: {t_solve:.3f} s)")
-    print_table(rows)
-    write_csv("adhesion_kernels.csv", rows)
-    print("\n2. mobility reuse (one cell captured from the free stream, k = 3)")
-    reuse_rows = reuse_chart(args.device, [2e-9, 10e-9] if q else [0.5e-9, 1e-9, 2e-9, 5e-9, 10e-9, 20e-9],
-                             0.005 if q else 0.02)
-    print_table(reuse_rows)
-    write_csv("adhesion_reuse.csv", reuse_rows)
-    print("\n2b. lateral lattice: two cells 12 um apart, one moved along the flow")
-    lateral_rows = lateral_error(args.device, 12e-6, [25e-9, 50e-9, 100e-9] if q else [12.5e-9, 25e-9, 50e-9,
-                                                                                       100e-9, 200e-9])
-    print_table(lateral_rows)
-    write_csv("adhesion_lateral.csv", lateral_rows)
-    print("\n3. step (kinetics fraction; reuse 2 nm)")
-    step_rows = step_chart(args.device, [0.4, 0.1, 0.025] if q else [0.4, 0.2, 0.1, 0.05, 0.025], 2 if q else 8,
-                           0.005 if q else 0.03)
-    print_table(step_rows)
-    write_csv("adhesion_step.csv", step_rows)
-    print("\n4. wall time per simulated second (k = 4, defaults)")
-    speed_rows = speed(args.device, 0.02 if q else 1.0, [1] if q else [1, 4])
-    print_table(speed_rows)
-    write_csv("adhesion_speed.csv", speed_rows)
-    print("chart:", chart(reuse_rows, step_rows, output("adhesion.png")))
+    if "kernels" in parts:
+        rows, t_solve = kernel_throughput(args.device, sizes)
+        print(f"\n1. bond kernels on {args.device} (one solve of a k = 4 cell near the wall: {t_solve:.3f} s)")
+        print_table(rows)
+        write_csv("adhesion_kernels.csv", rows)
+    if "reuse" in parts:
+        print("\n2. mobility reuse (one cell captured from the free stream, k = 3)")
+        reuse_rows = reuse_chart(args.device, [2e-9, 10e-9] if q else [0.5e-9, 1e-9, 2e-9, 5e-9, 10e-9, 20e-9],
+                                 0.005 if q else 0.02)
+        print_table(reuse_rows)
+        write_csv("adhesion_reuse.csv", reuse_rows)
+        print("\n2b. lateral lattice: two cells 12 um apart, one moved along the flow")
+        lateral_rows = lateral_error(args.device, 12e-6, [25e-9, 50e-9, 100e-9] if q else [12.5e-9, 25e-9, 50e-9,
+                                                                                           100e-9, 200e-9])
+        print_table(lateral_rows)
+        write_csv("adhesion_lateral.csv", lateral_rows)
+    if "step" in parts:
+        print("\n3. step (kinetics fraction; reuse 2 nm)")
+        step_rows = step_chart(args.device, [0.4, 0.1, 0.025] if q else [0.4, 0.2, 0.1, 0.05, 0.025], 2 if q else 8,
+                               0.005 if q else 0.03)
+        print_table(step_rows)
+        write_csv("adhesion_step.csv", step_rows)
+    if "speed" in parts:
+        print("\n4. wall time per simulated second (k = 4, defaults)")
+        speed_rows = speed(args.device, 0.02 if q else 1.0, [1] if q else [1, 4])
+        print_table(speed_rows)
+        write_csv("adhesion_speed.csv", speed_rows)
+    if {"reuse", "step"} <= parts:
+        print("chart:", chart(reuse_rows, step_rows, output("adhesion.png")))
 
 
 if __name__ == "__main__":

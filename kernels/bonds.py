@@ -9,7 +9,9 @@ reference point, ``receptor_body``); the receptors of adhesive body c are
 ``bond_anchor``: the ligand's point, ``bond_partner``: -1 for the wall, else the fixed body
 whose surface carries the ligand, ``bond_birth``: time of formation). One thread
 per cell sums its own rows in row order, so the reductions are deterministic on CPU and CUDA
-alike (no float atomics).
+alike (no float atomics). Every kernel takes the index of its first thread (``first``), so
+the host can split a long launch over CPU threads (``runtime.launch_rows``); no two threads
+write the same entry.
 
 Hertz patch (thesis ch. 4.2, eq. 4.9). The cells are rigid in the mobility problem; their
 compliance enters through the contact patch: a tip at lateral distance rho from the patch
@@ -67,7 +69,7 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
         return dtype(wp.randf(state))
 
     @wp.kernel(enable_backward=False)
-    def bond_geometry(bond_receptor: wp.array(dtype=int), bond_anchor: wp.array(dtype=vec3),
+    def bond_geometry(first: int, bond_receptor: wp.array(dtype=int), bond_anchor: wp.array(dtype=vec3),
                       bond_offset: wp.array(dtype=dtype), tips: wp.array(dtype=vec3),
                       receptor_body: wp.array(dtype=int), positions: wp.array(dtype=vec3),
                       rotations: wp.array(dtype=mat33),
@@ -75,7 +77,7 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
         """Per row: the bond vector x_m - x_o from anchor to tip (m; eq. 4.3 has its opposite,
         the direction of the tension) and the moment arm x_m - x_c as the matrix [arm]_x with
         [arm]_x e = arm x e (eq. 4.4 about the reference point x_c)."""
-        row = wp.tid()
+        row = first + wp.tid()
         r = bond_receptor[row]
         if r < 0:
             vector[row] = vec3()
@@ -87,12 +89,12 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
         moment[row] = wp.skew(arm)
 
     @wp.kernel(enable_backward=False)
-    def reduce_per_cell(bond_receptor: wp.array(dtype=int), moment: wp.array(dtype=mat33),
+    def reduce_per_cell(first: int, bond_receptor: wp.array(dtype=int), moment: wp.array(dtype=mat33),
                         bond_force: wp.array(dtype=vec3), capacity: int,
                         force: wp.array(dtype=vec3), torque: wp.array(dtype=vec3), count: wp.array(dtype=int)):
         """Force (N), torque (N m) and number of the bonds of each adhesive cell from each row's
         force on its tip (one thread per cell, rows in order)."""
-        c = wp.tid()
+        c = first + wp.tid()
         f = vec3()
         t = vec3()
         n = int(0)
@@ -106,12 +108,13 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
         count[c] = n
 
     @wp.kernel(enable_backward=False)
-    def rupture(bond_receptor: wp.array(dtype=int), vector: wp.array(dtype=vec3), spring: dtype, rest: dtype,
+    def rupture(first: int, bond_receptor: wp.array(dtype=int), vector: wp.array(dtype=vec3), spring: dtype,
+                rest: dtype,
                 compression: int, off_rate: dtype, compliance_per_kt: dtype, dt: dtype, seed: int, draw: int,
                 broken: wp.array(dtype=int)):
         """Bell rupture (eq. 4.1): k_r = k_r0 exp(r0 |F| / kT), F = sigma (L - lambda) (a slack bond
         carries no force when bonds resist tension only); broken with 1 - exp(-k_r dt)."""
-        row = wp.tid()
+        row = first + wp.tid()
         broken[row] = 0
         if bond_receptor[row] < 0:
             return
@@ -124,7 +127,8 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
             bond_receptor[row] = -1
 
     @wp.kernel(enable_backward=False)
-    def formation(bound: wp.array(dtype=int), tips: wp.array(dtype=vec3), receptor_body: wp.array(dtype=int),
+    def formation(first: int, bound: wp.array(dtype=int), tips: wp.array(dtype=vec3),
+                  receptor_body: wp.array(dtype=int),
                   positions: wp.array(dtype=vec3), rotations: wp.array(dtype=mat33),
                   patch_centre: wp.array(dtype=vec3), patch_radius: wp.array(dtype=dtype),
                   curvature: wp.array(dtype=dtype), rest: dtype, layer: dtype, spring_per_kt: dtype,
@@ -139,7 +143,7 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
         at z - lambda, clamped to the layer; or, if closer to its rest length, the best ligand on a
         ligand-bearing fixed cell (``cell_anchor``, ``cell_deviation``, ``cell_partner``: the
         body, -1 for none; found by ``closest_to_points``); formed with 1 - exp(-k_f dt)."""
-        r = wp.tid()
+        r = first + wp.tid()
         candidate[r] = 0
         if bound[r] != 0:
             return
@@ -167,14 +171,14 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
                 partner[r] = -1
 
     @wp.kernel(enable_backward=False)
-    def insert(candidate: wp.array(dtype=int), anchor: wp.array(dtype=vec3), offset: wp.array(dtype=dtype),
+    def insert(first: int, candidate: wp.array(dtype=int), anchor: wp.array(dtype=vec3), offset: wp.array(dtype=dtype),
                partner: wp.array(dtype=int), receptor_start: wp.array(dtype=int), capacity: int, time: dtype,
                bond_receptor: wp.array(dtype=int), bond_anchor: wp.array(dtype=vec3),
                bond_offset: wp.array(dtype=dtype), bond_partner: wp.array(dtype=int),
                bond_birth: wp.array(dtype=dtype), bound: wp.array(dtype=int)):
         """New bonds into each cell's free rows, receptors in index order, up to ``capacity``
         bonds per cell (the cap of thesis figs. 4.12-4.14: the rest are refused)."""
-        c = wp.tid()
+        c = first + wp.tid()
         row = c * capacity
         end = (c + 1) * capacity
         for r in range(receptor_start[c], receptor_start[c + 1]):
@@ -190,11 +194,12 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
                     bound[r] = 1
 
     @wp.kernel(enable_backward=False)
-    def mark_bound(bond_receptor: wp.array(dtype=int), bound: wp.array(dtype=int)):
-        row = wp.tid()
+    def mark_bound(first: int, bond_receptor: wp.array(dtype=int), bound: wp.array(dtype=int)):
+        row = first + wp.tid()
         r = bond_receptor[row]
         if r >= 0:
             bound[r] = 1
 
-    return SimpleNamespace(vec3=vec3, mat33=mat33, hertz_lowering=hertz_lowering, bond_geometry=bond_geometry, reduce_per_cell=reduce_per_cell,
+    return SimpleNamespace(vec3=vec3, mat33=mat33, hertz_lowering=hertz_lowering, bond_geometry=bond_geometry,
+                           reduce_per_cell=reduce_per_cell,
                            rupture=rupture, formation=formation, insert=insert, mark_bound=mark_bound)

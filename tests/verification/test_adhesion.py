@@ -49,7 +49,7 @@ def test_mean_bond_lifetime_under_constant_force_is_one_over_the_bell_rate():
     step = 0
     while np.isnan(lifetime).any():
         step += 1
-        wp.launch(k.rupture, dim=n, inputs=[receptor, vector, 1e-3, 30e-9, 0, 2.0,
+        wp.launch(k.rupture, dim=n, inputs=[0, receptor, vector, 1e-3, 30e-9, 0, 2.0,
                                             1e-10 / (BOLTZMANN * 310.0), dt, 11, step], outputs=[broken])
         lifetime[(broken.numpy() == 1)] = step * dt
     mean = dt / (1 - np.exp(-rate * dt))

@@ -293,7 +293,8 @@ def _adhesion(table, bodies, repulsion: Repulsion, dt_min: float, wall: bool) ->
     try:
         adhesion = Adhesion(
             [b.mesh for b in bodies], [b.fixed for b in bodies], adhesive=[b.adhesive for b in bodies],
-            receptor_density=_number("adhesion.receptor_density", get("receptor_density", 20e12), 0, 1e18, low_open=True),
+            receptor_density=_number("adhesion.receptor_density", get("receptor_density", 20e12), 0, 1e18,
+                                     low_open=True),
             ligand_density=(None if "ligand_density" not in table else
                             _number("adhesion.ligand_density", table["ligand_density"], 0, 1e18, low_open=True)),
             spring_constant=_number("adhesion.spring_constant", table["spring_constant"], 0, 1e3, low_open=True),

@@ -7,9 +7,9 @@ than the free bodies' 6 degrees of freedom each (a repulsive contact or two), el
 and torques on each free body (the grand mobility; tens of bonds).
 
 Reused (``reuse_tolerance = d > 0``, m, for states whose interactions hold stiff forces:
-bonds): the rigid bodies' mobility depends on the configuration only, and changes slowly with it, while bond forces change fast. A snapshot holds
-the flow solve (no loads) and the grand mobility at the configuration snapped to a lattice:
-free bodies' heights rounded to multiples of d, their orientations likewise in steps of d /
+bonds): the rigid bodies' mobility depends on the configuration only, and changes slowly with
+it, while bond forces change fast. A snapshot holds the flow solve (no loads) and the grand
+mobility at the configuration snapped to a lattice: free bodies' heights rounded to multiples of d, their orientations likewise in steps of d /
 outer radius (except for spheres, whose mobility does not depend on it) and, with more than
 one body, their lateral positions to multiples of ``reuse_lateral`` (default 50 d): a cell's
 mobility changes with its height over the gap to the wall (0.2 um when rolling), with another

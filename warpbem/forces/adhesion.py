@@ -51,6 +51,7 @@ from .interaction import ImplicitCoordinates, Interaction
 
 BOLTZMANN = 1.380649e-23  # J/K
 APPROACH_MARGIN = 100e-9  # m: a cell approaches the wall far less than this in one step
+SPLIT_THREADS = 4096  # launches at least this long are split over the CPU threads
 
 
 def _positive(name, value, allow_zero=False):
@@ -94,9 +95,10 @@ def sample_receptors(mesh, density: float, roughness: float, rng) -> np.ndarray:
 
 
 class Adhesion(Interaction):
-    """Bonds between the adhesive free cells and the wall (module docstring). Parameters in SI:
-    densities 1/m^2, spring_constant N/m, lengths m, rates 1/s, temperature K; per body
-    ``shear_modulus`` (Pa, None or 0: rigid, no contact patch) and ``poisson_ratio``."""
+    """Bonds between the adhesive free cells and the wall, or the fixed cells marked in
+    ``ligand_bodies`` (module docstring). Parameters in SI: densities 1/m^2, spring_constant
+    N/m, lengths m, rates 1/s, temperature K; per body ``shear_modulus`` (Pa, None or 0: rigid,
+    no contact patch) and ``poisson_ratio``; ``adhesive`` (default: every free body)."""
 
     name = "bond"
     implicit = True
@@ -176,12 +178,6 @@ class Adhesion(Interaction):
         """k_r of eq. 4.1 for bond forces (N; tension positive)."""
         return self.off_rate * np.exp(self.reactive_compliance * np.abs(force) / self.thermal_energy)
 
-    def formation_rate(self, deviation):
-        """k_f of eq. 4.2 for deviations from the rest length (m)."""
-        d = np.abs(deviation)
-        return self.effective_on_rate * np.exp(self.spring_constant * d * (self.reactive_compliance - 0.5 * d)
-                                               / self.thermal_energy)
-
     def tension(self, length):
         """Bond force sigma (L - lambda) (N, tension positive; slack bonds carry none unless
         ``compression``)."""
@@ -225,14 +221,21 @@ class Adhesion(Interaction):
                 wp.array(part["anchor"], dtype=k.vec3, device=self.device),
                 wp.array(part["offset"], dtype=wp.float64, device=self.device))
 
+    def _launch(self, kernel, n: int, arguments):
+        """Launch over n threads (the kernels' ``first`` offset prepended); on the CPU a long
+        launch is split over the thread pool, a short one is not worth the threads."""
+        if self.device.is_cpu and n >= SPLIT_THREADS:
+            runtime.launch_rows(kernel, n, lambda start, stop: [start, *arguments], self.device)
+        elif n:
+            self.wp.launch(kernel, dim=n, inputs=[0, *arguments], device=self.device)
+
     def geometry(self, table, frame):
         """(vector, moment) device arrays of every table row (``kernels/bonds.py``)."""
         wp, k = self.wp, self.k
         vector = wp.zeros(self.capacity, dtype=k.vec3, device=self.device)
         moment = wp.zeros(self.capacity, dtype=k.mat33, device=self.device)
-        wp.launch(k.bond_geometry, dim=self.capacity, device=self.device,
-                  inputs=[*table, self._tips, self._receptor_body, frame["positions"], frame["rotations"]],
-                  outputs=[vector, moment])
+        self._launch(k.bond_geometry, self.capacity, [*table, self._tips, self._receptor_body, frame["positions"],
+                                                      frame["rotations"], vector, moment])
         return vector, moment
 
     def tip_forces(self, vector):
@@ -248,9 +251,8 @@ class Adhesion(Interaction):
         force = wp.zeros(cells, dtype=k.vec3, device=self.device)
         torque = wp.zeros(cells, dtype=k.vec3, device=self.device)
         count = wp.zeros(cells, dtype=int, device=self.device)
-        wp.launch(k.reduce_per_cell, dim=cells, device=self.device,
-                  inputs=[receptor, moment, wp.array(bond_force, dtype=k.vec3, device=self.device), self.max_bonds],
-                  outputs=[force, torque, count])
+        forces = wp.array(bond_force, dtype=k.vec3, device=self.device)
+        self._launch(k.reduce_per_cell, cells, [receptor, moment, forces, self.max_bonds, force, torque, count])
         return force.numpy(), torque.numpy(), count.numpy()
 
     # -- protocol ---------------------------------------------------------------------------
@@ -285,7 +287,8 @@ class Adhesion(Interaction):
         rows = np.flatnonzero(part["receptor"] >= 0)
         if not len(rows):
             return None
-        vector, moment = (a.numpy()[rows] for a in self.geometry(self._table(part), self._frame(bodies, contacts, part)))
+        frame = self._frame(bodies, contacts, part)
+        vector, moment = (a.numpy()[rows] for a in self.geometry(self._table(part), frame))
         body = self.receptor_body[part["receptor"][rows].astype(int)]
         m = 3 * len(rows)
         unit_force, unit_torque = np.zeros((m, self.n_bodies, 3)), np.zeros((m, self.n_bodies, 3))
@@ -408,31 +411,28 @@ class Adhesion(Interaction):
         frame = self._frame(end_bodies, end_contacts, part)
         vector, _ = self.geometry(table, frame)
         broken = wp.zeros(self.capacity, dtype=int, device=self.device)
-        wp.launch(k.rupture, dim=self.capacity, device=self.device,
-                  inputs=[receptor, vector, self.spring_constant, self.equilibrium_length, int(self.compression),
-                          self.off_rate, self.reactive_compliance / self.thermal_energy, dt, self.seed, 2 * draw],
-                  outputs=[broken])
+        self._launch(k.rupture, self.capacity, [
+            receptor, vector, self.spring_constant, self.equilibrium_length, int(self.compression), self.off_rate,
+            self.reactive_compliance / self.thermal_energy, dt, self.seed, 2 * draw, broken])
         n_receptors = len(self.tips)
         bound = wp.zeros(n_receptors, dtype=int, device=self.device)
-        wp.launch(k.mark_bound, dim=self.capacity, device=self.device, inputs=[receptor], outputs=[bound])
+        self._launch(k.mark_bound, self.capacity, [receptor, bound])
         cell_anchor, cell_deviation, cell_partner = self.cell_ligands(end_bodies)
         candidate = wp.zeros(n_receptors, dtype=int, device=self.device)
         ligand = wp.zeros(n_receptors, dtype=k.vec3, device=self.device)
         lowering = wp.zeros(n_receptors, dtype=wp.float64, device=self.device)
         chosen = wp.zeros(n_receptors, dtype=int, device=self.device)
-        wp.launch(k.formation, dim=n_receptors, device=self.device,
-                  inputs=[bound, self._tips, self._receptor_body, frame["positions"], frame["rotations"],
-                          frame["patch_centre"], frame["patch_radius"], frame["curvature"], self.equilibrium_length,
-                          self.ligand_layer, self.spring_constant / self.thermal_energy, self.reactive_compliance,
-                          self.effective_on_rate, dt, self.seed, 2 * draw + 1,
-                          wp.array(cell_anchor, dtype=k.vec3, device=self.device),
-                          wp.array(cell_deviation, dtype=wp.float64, device=self.device),
-                          wp.array(cell_partner, dtype=int, device=self.device)],
-                  outputs=[candidate, ligand, lowering, chosen])
+        self._launch(k.formation, n_receptors, [
+            bound, self._tips, self._receptor_body, frame["positions"], frame["rotations"], frame["patch_centre"],
+            frame["patch_radius"], frame["curvature"], self.equilibrium_length, self.ligand_layer,
+            self.spring_constant / self.thermal_energy, self.reactive_compliance, self.effective_on_rate, dt,
+            self.seed, 2 * draw + 1, wp.array(cell_anchor, dtype=k.vec3, device=self.device),
+            wp.array(cell_deviation, dtype=wp.float64, device=self.device),
+            wp.array(cell_partner, dtype=int, device=self.device), candidate, ligand, lowering, chosen])
         partner = wp.array(part["partner"].astype(np.int32), dtype=int, device=self.device)
-        wp.launch(k.insert, dim=len(self.cells), device=self.device,
-                  inputs=[candidate, ligand, lowering, chosen, self._receptor_start, self.max_bonds, end_time],
-                  outputs=[receptor, anchor, offset, partner, birth, bound])
+        self._launch(k.insert, len(self.cells), [candidate, ligand, lowering, chosen, self._receptor_start,
+                                                 self.max_bonds, end_time, receptor, anchor, offset, partner, birth,
+                                                 bound])
         vector, moment = self.geometry(table, frame)
         on_wall = (partner.numpy() < 0)[:, None]
         force, _, count = self.reduce(receptor, moment, self.tip_forces(vector.numpy()) * on_wall)
@@ -440,8 +440,9 @@ class Adhesion(Interaction):
         normal[self.cells] = np.maximum(-force[:, 2], 0.0)  # the Hertz load: the wall's bonds only
         counts[self.cells] = count
         compliant = self.shear_modulus > 0
-        radius = np.where(compliant, hertz_contact_radius(normal, self.radius, np.where(compliant, self.shear_modulus,
-                                                                                          1.0), self.poisson_ratio), 0.0)
+        modulus = np.where(compliant, self.shear_modulus, 1.0)
+        radius = np.where(compliant, hertz_contact_radius(normal, self.radius, modulus, self.poisson_ratio), 0.0)
         return {"receptor": receptor.numpy().astype(float), "anchor": anchor.numpy().astype(float),
-                "offset": offset.numpy(), "partner": partner.numpy().astype(float), "birth": birth.numpy(), "count": counts, "contact_radius": radius,
+                "offset": offset.numpy(), "partner": partner.numpy().astype(float), "birth": birth.numpy(),
+                "count": counts, "contact_radius": radius,
                 "contact_force": normal, "draws": np.array(float(draw + 1))}
