@@ -7,6 +7,7 @@ files, for scenes/README.md:
     warpbem sweep scenes/rolling_cells.toml --output-dir results/rolling_cells
     warpbem run scenes/free_meets_rolling.toml --output results/free_meets_rolling.h5
     warpbem sweep scenes/recruitment_capture.toml --output-dir results/recruitment_capture
+    warpbem sweep scenes/collision_binding.toml --output-dir results/collision_binding
     python scenes/thesis_ch4.py
 
 Table 1 (results/thesis_ch4.csv), solitary rolling, figs. 4.4-4.14. The thesis ran 2000
@@ -16,7 +17,7 @@ Table 1 (results/thesis_ch4.csv), solitary rolling, figs. 4.4-4.14. The thesis r
 Hertz contact area (mean over the run and at the end).
 
 Table 2 (results/adhesion_summary.csv), several rolling cells, a free cell meeting a rolling
-one, recruitment by capture: each adhesive free cell's state by the rule of
+one, recruitment by capture, binding to an adherent cell: each adhesive free cell's state by the rule of
 ``warpbem/app/adhesion_states.py``, its mean velocity over the last half of the run (a line
 fitted to x(t)), its bonds, and how close its microvillus tips came to the wall (closest
 surface gap less the 175 nm tips).
@@ -107,7 +108,7 @@ def main():
     write([row for name in ROLLING for row in sweep(name, rolling)], "thesis_ch4.csv")
     single = ROOT / "results" / "free_meets_rolling.h5"
     write(sweep("rolling_cells", cells) + (cells(single, "free_meets_rolling") if single.exists() else [])
-          + sweep("recruitment_capture", cells), "adhesion_summary.csv")
+          + sweep("recruitment_capture", cells) + sweep("collision_binding", cells), "adhesion_summary.csv")
 
 
 if __name__ == "__main__":
