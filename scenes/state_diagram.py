@@ -16,9 +16,10 @@ import csv
 import json
 from pathlib import Path
 
-import h5py
+
 
 from warpbem.app.adhesion_states import STATES, classify
+from warpbem.app.io import open_result
 
 HERE = Path(__file__).resolve().parent
 
@@ -26,7 +27,7 @@ HERE = Path(__file__).resolve().parent
 def states(runs: Path) -> list[dict]:
     rows = []
     for path in sorted(runs.glob("point*.h5")):
-        with h5py.File(path) as f:
+        with open_result(path) as f:
             scene = json.loads(f.attrs["scene"])
             t, x = f["time"][:], f["position"][:, 0, 0]
             bonds, u0 = f["bond_count"][:, 0], f["velocity"][0, 0, 0]
@@ -45,7 +46,7 @@ def chart(rows, path):
     import matplotlib.pyplot as plt
 
     marks = {"no adhesion": ("o", "white"), "rolling": ("s", "C1"), "firm adhesion": ("D", "C0")}
-    fig, ax = plt.subplots(figsize=(6.5, 5))
+    fig, ax = plt.subplots(figsize=(8, 5))
     for state in STATES:
         chosen = [r for r in rows if r["state"] == state]
         if chosen:
@@ -54,10 +55,11 @@ def chart(rows, path):
     for r in rows:
         ax.annotate(f"{r['velocity_ratio']:.2g}", (r["reactive_compliance"] * 1e10, r["off_rate"]),
                     textcoords="offset points", xytext=(9, 6), fontsize=7)
+    ax.plot([0.39], [2.4], "*", color="k", markersize=12, label="thesis Table 4.1 (not run here)")
     ax.set(xscale="log", yscale="log", xlabel="reactive compliance r0 [A]", ylabel="unstressed off-rate k_r0 [1/s]",
-           title="adhesion state diagram (labels: V / V_free, last half)")
+           title="adhesion state diagram, sigma = 100 dyn/cm (labels: V / V_free, last half)")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8, loc="lower right")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     return path

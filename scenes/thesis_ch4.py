@@ -29,10 +29,11 @@ import csv
 import json
 from pathlib import Path
 
-import h5py
+
 import numpy as np
 
 from warpbem.app.adhesion_states import classify
+from warpbem.app.io import open_result
 
 ROOT = Path(__file__).resolve().parent.parent
 ROUGHNESS = 175e-9
@@ -41,7 +42,7 @@ ROLLING = ["fig4_04_06_stiff_bonds", "fig4_09_11_soft_bonds", "fig4_12_14_bond_c
 
 def rolling(path: Path, label: str) -> list[dict]:
     """Table 1 row of a solitary rolling run."""
-    with h5py.File(path) as f:
+    with open_result(path) as f:
         t, u = f["time"][:], f["velocity"][:, 0, 0]
         x = f["position"][:, 0, 0]
         bonds, area = f["bond_count"][:, 0], f["contact_area"][:, 0]
@@ -56,7 +57,7 @@ def rolling(path: Path, label: str) -> list[dict]:
 def cells(path: Path, label: str) -> list[dict]:
     """Table 2 rows: one per adhesive free cell of a run."""
     rows = []
-    with h5py.File(path) as f:
+    with open_result(path) as f:
         names = json.loads(f.attrs["body_names"])
         scene = json.loads(f.attrs["scene"])
         t, x, z = f["time"][:], f["position"][:, :, 0], f["position"][:, :, 2]
