@@ -118,3 +118,15 @@ def test_a_point_failing_in_a_local_worker_is_named_and_the_pool_shut_down(tmp_p
     assert cli.main(["sweep", str(path), "--vary", varies[0], "--output-dir", str(tmp_path / "bad")]) == 1
     err = capsys.readouterr().err
     assert "warpbem sweep: point001 (solver.tolerance=1e-300) failed" in err and "Traceback" not in err
+
+
+def test_a_run_missing_a_column_of_this_version_is_refused_by_name(tmp_path):
+    """A file written by an older warpbem (here: a column removed) is not resumed half-way
+    with a KeyError: the refusal names the column."""
+    path = write(tmp_path, BASE)
+    out = tmp_path / "old.h5"
+    run.run(path, out, progress=lambda line: None)
+    with h5py.File(out, "a") as f:
+        del f["closest_gap"]
+    with pytest.raises(run.RunFileError, match="no column 'closest_gap' that this version of warpbem writes"):
+        run.run(None, out, resume=True, progress=lambda line: None)

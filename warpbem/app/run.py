@@ -43,7 +43,12 @@ def _resumed(output: Path, overrides):
     with open_result(output, needs=("scene", "scene_folder", "time", "steps")) as f:
         stored = json.loads(f.attrs["scene"])
         scene = scenes.parse(scenes.apply_overrides(stored, overrides), Path(f.attrs["scene_folder"]))
-        rows = complete_rows(f, frame_columns(scene.model))
+        columns = frame_columns(scene.model)
+        missing = [name for name in columns if name not in f]
+        if missing:
+            raise RunFileError(f"{output}: the run has no column {missing[0]!r} that this version of warpbem writes"
+                               f" for its scene (written by an older version?); it cannot be resumed")
+        rows = complete_rows(f, columns)
         if rows == 0:
             raise RunFileError(f"{output}: the run has no complete frame to resume from")
         state = read_state(f, scene.model, rows - 1)
