@@ -220,6 +220,8 @@ def main():
     parser.add_argument("--parts", default="kernels,reuse,step,speed",
                         help="comma-separated parts to run: kernels, reuse (with the lateral lattice), step, speed")
     parser.add_argument("--replot", action="store_true", help="only redraw the chart from the CSV tables")
+    parser.add_argument("--cells", default="1,4", help="cell counts of the speed part (default 1,4)")
+    parser.add_argument("--simulated", type=float, default=1.0, help="simulated seconds of the speed part")
     args = parser.parse_args()
     if args.replot:
         tables = [[{k: float(v) for k, v in row.items()} for row in csv.DictReader(output(name).open())]
@@ -253,7 +255,8 @@ def main():
         write_csv("adhesion_step.csv", step_rows)
     if "speed" in parts:
         print("\n4. wall time per simulated second (k = 4, defaults)")
-        speed_rows = speed(args.device, 0.02 if q else 1.0, [1] if q else [1, 4])
+        speed_rows = speed(args.device, 0.02 if q else args.simulated,
+                           [1] if q else [int(c) for c in args.cells.split(",")])
         print_table(speed_rows)
         write_csv("adhesion_speed.csv", speed_rows)
     if {"reuse", "step"} <= parts:
