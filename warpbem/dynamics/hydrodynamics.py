@@ -9,11 +9,12 @@ and torques on each free body (the grand mobility; tens of bonds).
 Reused (``reuse_tolerance = d > 0``, m, for states whose interactions hold stiff forces:
 bonds): the rigid bodies' mobility depends on the configuration only, and changes slowly with
 it, while bond forces change fast. A snapshot holds the flow solve (no loads) and the grand
-mobility at the configuration snapped to a lattice: free bodies' heights rounded to multiples of d, their orientations likewise in steps of d /
-outer radius (except for spheres, whose mobility does not depend on it) and, with more than
-one body, their lateral positions to multiples of ``reuse_lateral`` (default 50 d): a cell's
-mobility changes with its height over the gap to the wall (0.2 um when rolling), with another
-cell's position only over their distance (microns). A lone body above the wall in shear
+mobility at the configuration snapped to a lattice: free bodies' heights rounded to multiples
+of d, their orientations likewise in steps of d / outer radius (except for spheres, whose
+mobility does not depend on it) and, with more than one body, their lateral positions to
+multiples of ``reuse_lateral`` (default 50 d): a cell's mobility changes with its height over
+the gap to the wall (0.2 um when rolling), with another cell's position only over their
+distance (microns). A lone body above the wall in shear
 (u = gdot z e_x) is invariant under translation along the wall, so its snapshots are keyed by
 height alone and computed at x = y = 0. The background for any explicit loads and the stiff
 forces follow from a snapshot by linearity, so a step costs no solve while the cells stay within
@@ -47,6 +48,12 @@ class Motion:
     torque: np.ndarray
     iterations: int
     residual: float
+
+    @classmethod
+    def of(cls, solution) -> "Motion":
+        """The motion and loads of a ``MobilitySolution`` (without its GMRES vectors)."""
+        return cls(solution.velocity, solution.angular_velocity, solution.force, solution.torque,
+                   solution.iterations, solution.residual)
 
 
 @dataclass(frozen=True)
@@ -119,9 +126,8 @@ class HydrodynamicSolves:
             motion = Motion(flow.velocity + u, flow.angular_velocity + w, flow.force + f, flow.torque + t,
                             flow.iterations, flow.residual)
             return motion, snapshot
-        solution = self.solver.solve(bodies, forces=loads.force, torques=loads.torque, check_placement_first=False)
-        return Motion(solution.velocity, solution.angular_velocity, solution.force, solution.torque,
-                      solution.iterations, solution.residual), None
+        return Motion.of(self.solver.solve(bodies, forces=loads.force, torques=loads.torque,
+                                           check_placement_first=False)), None
 
     def basis(self, bodies, coordinates, snapshot) -> tuple[Responses, str]:
         """The Responses the implicit forces along ``coordinates`` are combined from."""
@@ -179,9 +185,8 @@ class HydrodynamicSolves:
             check_placement(snapped, self.model.flow.wall)
         except PlacementError:
             snapped, key = bodies, None  # too close to snap: solved exactly, not kept
-        flow = self.solver.solve(snapped, check_placement_first=False)
-        snapshot = (Motion(flow.velocity, flow.angular_velocity, flow.force, flow.torque, flow.iterations,
-                           flow.residual), self._grand_mobility(snapped))
+        snapshot = (Motion.of(self.solver.solve(snapped, check_placement_first=False)),
+                    self._grand_mobility(snapped))
         self.snapshots_solved += 1
         if key is not None:
             self._snapshots[key] = snapshot
