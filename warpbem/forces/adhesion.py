@@ -156,6 +156,7 @@ class Adhesion(Interaction):
         self.n_bodies = n
         self.capacity = self.max_bonds * len(self.cells)
         self.device = None
+        self._last_state = None  # (contacts, part, vector, moment): _bonds_at
 
     # -- rates ------------------------------------------------------------------------------
     @property
@@ -238,6 +239,15 @@ class Adhesion(Interaction):
                                                       frame["rotations"], vector, moment])
         return vector, moment
 
+    def _bonds_at(self, bodies, contacts, part, rows):
+        """(vector, moment) of the bonds ``rows`` at a state, computed once for the step bound
+        and the implicit coordinates, which both ask for them (keyed by the state's own Contacts
+        and part, which it holds, so the key cannot be a stale object's)."""
+        if self._last_state is None or self._last_state[0] is not contacts or self._last_state[1] is not part:
+            vector, moment = self.geometry(self._table(part), self._frame(bodies, contacts, part))
+            self._last_state = (contacts, part, vector.numpy()[rows], moment.numpy()[rows])
+        return self._last_state[2:]
+
     def tip_forces(self, vector):
         """The force of each bond on its tip (N, (rows, 3)): -sigma (L - lambda) x_b / L (eq. 4.3)."""
         length = np.linalg.norm(vector, axis=1)
@@ -287,8 +297,7 @@ class Adhesion(Interaction):
         rows = np.flatnonzero(part["receptor"] >= 0)
         if not len(rows):
             return None
-        frame = self._frame(bodies, contacts, part)
-        vector, moment = (a.numpy()[rows] for a in self.geometry(self._table(part), frame))
+        vector, moment = self._bonds_at(bodies, contacts, part, rows)
         body = self.receptor_body[part["receptor"][rows].astype(int)]
         m = 3 * len(rows)
         unit_force, unit_torque = np.zeros((m, self.n_bodies, 3)), np.zeros((m, self.n_bodies, 3))
@@ -394,7 +403,7 @@ class Adhesion(Interaction):
                 return np.inf
         rates = [self.fastest_formation, self.off_rate]
         if len(rows):
-            vector = self.geometry(self._table(part), self._frame(bodies, contacts, part))[0].numpy()[rows]
+            vector = self._bonds_at(bodies, contacts, part, rows)[0]
             rates.append(self.rupture_rate(self.tension(np.linalg.norm(vector, axis=1))).max())
         fastest = max(rates)
         return np.inf if fastest == 0 else self.kinetics_fraction / fastest
