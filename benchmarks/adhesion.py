@@ -8,7 +8,8 @@
    from snapshots on lattices of 0.5 - 20 nm, same seed and steps: the error of the distance
    rolled before arrest, of the velocity history and of the bond count, against the speed-up;
    and (2b) the change of two cells' grand mobility when one moves along the flow by 12.5 -
-   200 nm, the error of a lateral lattice of twice that;
+   200 nm, the error of a lateral lattice of twice that; (2c) the error of the several-body
+   snapshots' height lattice, with and without each cell's self part moved to its own height;
 3. the step: kinetics_fraction (k dt per step) from 0.4 to 0.025, 8 seeds each: mean distance
    to arrest and bonds at the end, against the cost;
 4. wall time per simulated second of one rolling cell (k = 4, the scene defaults) and of four
@@ -158,6 +159,41 @@ def lateral_error(device, spacing, shifts):
     return rows
 
 
+def interaction_error(device, spacing, lattices, fine=0.5e-9):
+    """Error of the several-body snapshots on a height lattice D (hydrodynamics.py): two cells
+    ``spacing`` apart along the flow at the rest height, at heights 0.4 D above and below the
+    lattice point (on the fine lattice, so only the interaction lattice errs), from the split
+    snapshot (interaction at the lattice point, each cell's self part at its own height) and
+    from the interaction snapshot alone, against the exact solve there."""
+    mesh = wb.mesh.sphere(A, 3)
+    from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion
+
+    def motion(flow, grand):
+        return grand.quadratic(), np.concatenate([flow.velocity.ravel(), flow.angular_velocity.ravel() * A])
+
+    def change(a, b):  # of the grand mobility and of the motion in the flow
+        return [np.abs(x - y).max() / np.abs(y).max() for x, y in zip(a, b)]
+
+    rows = []
+    for lattice in lattices:
+        model = Model([mesh, mesh], [False, False], Flow(100.0, 1e-3),
+                      solver=SolverOptions(reuse_tolerance=fine, reuse_lateral=spacing / 8, reuse_interaction=lattice))
+        hydro = HydrodynamicSolves(model, model.solver.build(model.flow, device))
+        base = np.round(REST / lattice) * lattice
+        for name, offsets in (("opposite", (0.4, -0.4)), ("same", (0.4, 0.4))):
+            bodies = [Body(mesh, position=(0.0, 0.0, base + offsets[0] * lattice)),
+                      Body(mesh, position=(spacing, 0.0, base + offsets[1] * lattice))]
+            exact = motion(Motion.of(hydro.solver.solve(bodies)),
+                           hydro._grand_mobility(bodies))
+            split = motion(*hydro._snapshot(bodies))
+            coarse = motion(*hydro._kept(*hydro._snapped(bodies, lattice), lambda b: None))
+            (grand_split, flow_split), (grand_coarse, flow_coarse) = change(split, exact), change(coarse, exact)
+            rows.append(dict(lattice_nm=lattice * 1e9, heights=name, grand_split=grand_split,
+                             grand_interaction_only=grand_coarse, flow_split=flow_split,
+                             flow_interaction_only=flow_coarse))
+    return rows
+
+
 def step_chart(device, fractions, seeds, end):
     rows = []
     for f in fractions:
@@ -247,6 +283,11 @@ def main():
                                                                                            100e-9, 200e-9])
         print_table(lateral_rows)
         write_csv("adhesion_lateral.csv", lateral_rows)
+        print("\n2c. height lattice of the several-body snapshots: two cells 12 um apart along the flow")
+        interaction_rows = interaction_error(args.device, 12e-6, [10e-9, 40e-9] if q else [5e-9, 10e-9, 20e-9,
+                                                                                        40e-9, 80e-9])
+        print_table(interaction_rows)
+        write_csv("adhesion_interaction.csv", interaction_rows)
     if "step" in parts:
         print("\n3. step (kinetics fraction; reuse 2 nm)")
         step_rows = step_chart(args.device, [0.4, 0.1, 0.025] if q else [0.4, 0.2, 0.1, 0.05, 0.025], 2 if q else 8,

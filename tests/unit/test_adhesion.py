@@ -204,6 +204,7 @@ mesh = { shape = "sphere", radius = 2.0e-6, subdivisions = 2 }
     ("bodies.0.shear_modulus=-1.0", r"bodies.0.shear_modulus: -1 is outside"),
     ("flow.wall=false", r"physics.adhesion: bonds form with ligands on the wall"),
     ("bodies.0.adhesive=false", r"no free body is adhesive"),
+    ("solver.reuse_interaction=1.0e-9", r"solver.reuse_interaction: 1e-09 is outside the allowed range \[2e-09"),
     ("bodies.0.ligands=true", r"bodies.0.ligands: ligands are modelled on fixed \(adherent\) cells only"),
 ])
 def test_adhesion_scene_keys_are_checked_by_name(tmp_path, override, message):

@@ -28,7 +28,9 @@ viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
                                 snapshots reused across steps, dynamics/hydrodynamics.py;
                                 default 0, with adhesion on ADHESION_REUSE_TOLERANCE),
                                 reuse_lateral (m; their lateral lattice with several bodies,
-                                default 50 x reuse_tolerance)
+                                default 50 x reuse_tolerance), reuse_interaction (m; the height
+                                lattice of the several-body snapshots, default 10 x
+                                reuse_tolerance)
     [[bodies]]                  name, position = [x, y, z], orientation = [w, x, y, z],
                                 fixed = false, density = 1000.0, force = [0, 0, 0] (N),
                                 torque = [0, 0, 0] (N m) on free bodies, adhesive = true (free
@@ -196,7 +198,7 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
                                           "frame_interval"}, ("end",))
     solver = _table("solver", table.get("solver", {}), {"quadrature_order", "contact_refinement", "tolerance",
                                                         "refine_fixed_at_wall", "dtype", "reuse_tolerance",
-                                                        "reuse_lateral"})
+                                                        "reuse_lateral", "reuse_interaction"})
     if not isinstance(table["bodies"], list) or not table["bodies"]:
         raise SceneError("bodies: expected at least one [[bodies]] entry")
     bodies = []
@@ -266,7 +268,10 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
             dtype=_choice("solver.dtype", solver.get("dtype", "float64"), ("float64", "float32")),
             reuse_tolerance=reuse,
             reuse_lateral=(None if "reuse_lateral" not in solver else
-                           _number("solver.reuse_lateral", solver["reuse_lateral"], 0, 1e-5, low_open=True))),
+                           _number("solver.reuse_lateral", solver["reuse_lateral"], 0, 1e-5, low_open=True)),
+            reuse_interaction=(None if "reuse_interaction" not in solver else
+                               _number("solver.reuse_interaction", solver["reuse_interaction"], max(reuse, 1e-12),
+                                       1e-6))),
         policy=StepPolicy(dt_max, dt_min,
                           _number("time.contact_gap", time.get("contact_gap", 5e-7), 0, 1e-2, low_open=True)),
         scheme=scheme)

@@ -11,17 +11,24 @@ bonds): the rigid bodies' mobility depends on the configuration only, and change
 it, while bond forces change fast. A snapshot holds the flow solve (no loads) and the grand
 mobility at the configuration snapped to a lattice: free bodies' heights rounded to multiples
 of d, their orientations likewise in steps of d / outer radius (except for spheres, whose
-mobility does not depend on it) and, with more than one body, their lateral positions to
-multiples of ``reuse_lateral`` (default 50 d): a cell's mobility changes with its height over
-the gap to the wall (0.2 um when rolling), with another cell's position only over their
-distance (microns). A lone body above the wall in shear
-(u = gdot z e_x) is invariant under translation along the wall, so its snapshots are keyed by
-height alone and computed at x = y = 0. The background for any explicit loads and the stiff
-forces follow from a snapshot by linearity, so a step costs no solve while the cells stay within
-d of a snapped configuration already seen; the error is first order in d (charted by
-``benchmarks/adhesion.py``). The evaluation stays a pure function of the state (resumed runs
-reproduce uninterrupted ones). A snapped configuration that is not a valid placement (a gap
-below d) is solved exactly.
+mobility does not depend on it). A lone body above the wall in shear (u = gdot z e_x) is
+invariant under translation along the wall, so its snapshots are keyed by height alone and
+computed at x = y = 0. With several bodies the snapshot is split: the whole system's (the
+interaction snapshot) on a coarser lattice, heights to ``reuse_interaction`` (default 10 d,
+orientations likewise) and lateral positions to ``reuse_lateral`` (default 50 d), and each
+free body's self part moved from its coarse height to its fine one by the difference of its
+lone snapshots there, M(X) ~ M(X*) + sum_i [M_i(h_i) - M_i(h_i*)] on body i's own block. A
+cell's mobility changes with its height over the gap to the wall (0.2 um when rolling), but
+the whole system's snapshot costs 6 n + 1 solves of n bodies and with n rolling cells a fine
+lattice of every height would need a new one at nearly every step; the lone ones cost 7 solves
+of one body. The coupling between cells still depends on their gaps (a near-wall cell answers
+another's flow with its own near-wall mobility), so the split errs by 2e-3 at 20 nm where the
+coarse snapshot alone errs by 7e-3 (benchmarks/adhesion.py, 2c). The background for any
+explicit loads and the stiff forces follow from a snapshot by linearity, so a step costs no
+solve while the cells stay near a snapped configuration already seen; the error is first
+order in the lattice spacings (charted by ``benchmarks/adhesion.py``). The evaluation stays a
+pure function of the state (resumed runs reproduce uninterrupted ones). A snapped
+configuration that is not a valid placement (a gap below the spacing) is solved exactly.
 """
 
 from __future__ import annotations
@@ -110,8 +117,11 @@ class HydrodynamicSolves:
         self.solver = solver
         self.tolerance = model.solver.reuse_tolerance
         self.lateral = model.solver.reuse_lateral or 50.0 * self.tolerance
+        self.interaction = model.solver.reuse_interaction or 10.0 * self.tolerance
         self.spherical = [is_spherical(m) for m in model.meshes]
         self.free = np.flatnonzero(~model.fixed_mask)
+        # bodies sharing a mesh share their lone snapshots
+        self.lone_of = [next(j for j, other in enumerate(model.meshes) if other is m) for m in model.meshes]
         self._snapshots: OrderedDict = OrderedDict()
         self.snapshots_solved = 0
 
@@ -120,7 +130,11 @@ class HydrodynamicSolves:
         serve states with ``stiff`` forces only (bonds), so a free-stream pass, whose
         configurations never repeat, costs one solve per state."""
         if self.tolerance > 0 and stiff:
-            snapshot = self._snapshot(bodies)
+            try:
+                snapshot = self._snapshot(bodies)
+            except _TooClose:  # solved exactly, not kept
+                snapshot = (Motion.of(self.solver.solve(bodies, check_placement_first=False)),
+                            self._grand_mobility(bodies))
             flow, basis = snapshot
             u, w, f, t = basis.combine(self.body_coefficients(loads.force, loads.torque))
             motion = Motion(flow.velocity + u, flow.angular_velocity + w, flow.force + f, flow.torque + t,
@@ -143,15 +157,6 @@ class HydrodynamicSolves:
         radii = self.model.outer_radii[self.free, None]
         return np.concatenate([force[self.free], torque[self.free] / radii], axis=1).ravel()
 
-    def _body_loads(self):
-        n, p = self.model.n_bodies, 6 * len(self.free)
-        force, torque = np.zeros((p, n, 3)), np.zeros((p, n, 3))
-        for k, b in enumerate(self.free):
-            for i in range(3):
-                force[6 * k + i, b, i] = 1.0
-                torque[6 * k + 3 + i, b, i] = self.model.outer_radii[b]
-        return force, torque
-
     def _responses(self, bodies, load_force, load_torque) -> Responses:
         solves = [self.solver.solve(bodies, forces=PROBE_FORCE * f, torques=PROBE_FORCE * t,
                                     check_placement_first=False, background=False)
@@ -161,56 +166,101 @@ class HydrodynamicSolves:
         return Responses(*stack, load_force, load_torque, sum(s.iterations for s in solves),
                          max(s.residual for s in solves))
 
-    def _grand_mobility(self, bodies) -> Responses:
-        """The "bodies" basis with the free bodies' motion taken from the symmetrised grand
-        mobility: the collocation discretisation is reciprocal only to its discretisation error
-        (0.5 % in the translation-rotation coupling of a 24-element sphere), and a joint step
-        whose rates and dissipation came from different halves would hold a cell at rest with a
-        load that is not its holding load."""
-        r = self._responses(bodies, *self._body_loads())
+    def _grand_mobility(self, bodies, radii=None) -> Responses:
+        """The "bodies" basis of the free bodies in ``bodies`` (outer ``radii``, default the
+        model's), with their motion taken from the symmetrised grand mobility: the collocation
+        discretisation is reciprocal only to its discretisation error (0.5 % in the
+        translation-rotation coupling of a 24-element sphere), and a joint step whose rates and
+        dissipation came from different halves would hold a cell at rest with a load that is not
+        its holding load."""
+        radii = self.model.outer_radii if radii is None else radii
+        free = [b for b, body in enumerate(bodies) if not body.fixed]
+        force, torque = np.zeros((6 * len(free), len(bodies), 3)), np.zeros((6 * len(free), len(bodies), 3))
+        for k, b in enumerate(free):
+            for i in range(3):
+                force[6 * k + i, b, i] = 1.0
+                torque[6 * k + 3 + i, b, i] = radii[b]
+        r = self._responses(bodies, force, torque)
         q = r.quadratic()
         velocity, angular_velocity = r.velocity.copy(), r.angular_velocity.copy()
-        for j, b in enumerate(self.free):
+        for j, b in enumerate(free):
             velocity[:, b] = q[:, 6 * j:6 * j + 3]
-            angular_velocity[:, b] = q[:, 6 * j + 3:6 * j + 6] / self.model.outer_radii[b]
+            angular_velocity[:, b] = q[:, 6 * j + 3:6 * j + 6] / radii[b]
         return Responses(velocity, angular_velocity, r.force, r.torque, r.load_force, r.load_torque,
                          r.iterations, r.residual)
 
     def _snapshot(self, bodies):
-        key, snapped = self._snapped(bodies)
+        """The (flow Motion, grand-mobility Responses) of ``bodies`` from the snapshots: a lone
+        body's own; with several, the interaction snapshot on the coarse lattice with each free
+        body's self part moved from its coarse height (and orientation) to its fine one."""
+        if len(bodies) == 1:
+            return self._lone(0, bodies[0], self.tolerance)
+        key, snapped = self._snapped(bodies, self.interaction)
+        flow, grand = self._kept(key, snapped, lambda b: (Motion.of(self.solver.solve(b, check_placement_first=False)),
+                                                          self._grand_mobility(b)))
+        if self.interaction == self.tolerance:
+            return flow, grand
+        velocity, angular_velocity = flow.velocity.copy(), flow.angular_velocity.copy()
+        basis_velocity, basis_angular = grand.velocity.copy(), grand.angular_velocity.copy()
+        for j, b in enumerate(self.free):
+            (fine_flow, fine), (coarse_flow, coarse) = (self._lone(b, bodies[b], d)
+                                                        for d in (self.tolerance, self.interaction))
+            velocity[b] += fine_flow.velocity[0] - coarse_flow.velocity[0]
+            angular_velocity[b] += fine_flow.angular_velocity[0] - coarse_flow.angular_velocity[0]
+            rows = slice(6 * j, 6 * j + 6)
+            basis_velocity[rows, b] += fine.velocity[:, 0] - coarse.velocity[:, 0]
+            basis_angular[rows, b] += fine.angular_velocity[:, 0] - coarse.angular_velocity[:, 0]
+        return (Motion(velocity, angular_velocity, flow.force, flow.torque, flow.iterations, flow.residual),
+                Responses(basis_velocity, basis_angular, grand.force, grand.torque, grand.load_force,
+                          grand.load_torque, grand.iterations, grand.residual))
+
+    def _lone(self, index, body, spacing):
+        """Snapshot of model body ``index`` alone above the wall, its height (and orientation)
+        snapped to ``spacing``: invariant under translation along the wall, so at x = y = 0."""
+        position = np.array([0.0, 0.0, body.position[2]])
+        entry, (lone,) = self._snapped([Body(body.mesh, position=position, orientation=body.orientation)],
+                                       spacing, [index])
+        radii = self.model.outer_radii[[index]]
+        return self._kept(("lone", self.lone_of[index], spacing) + entry, [lone],
+                          lambda b: (Motion.of(self.solver.solve(b, check_placement_first=False)),
+                                     self._grand_mobility(b, radii)))
+
+    def _kept(self, key, snapped, solve):
         if key in self._snapshots:
             self._snapshots.move_to_end(key)
             return self._snapshots[key]
         try:
             check_placement(snapped, self.model.flow.wall)
         except PlacementError:
-            snapped, key = bodies, None  # too close to snap: solved exactly, not kept
-        snapshot = (Motion.of(self.solver.solve(snapped, check_placement_first=False)),
-                    self._grand_mobility(snapped))
+            raise _TooClose from None
+        snapshot = solve(snapped)
         self.snapshots_solved += 1
-        if key is not None:
-            self._snapshots[key] = snapshot
-            while len(self._snapshots) > MAX_SNAPSHOTS:
-                self._snapshots.popitem(last=False)
+        self._snapshots[key] = snapshot
+        while len(self._snapshots) > MAX_SNAPSHOTS:
+            self._snapshots.popitem(last=False)
         return snapshot
 
-    def _snapped(self, bodies):
-        d = self.tolerance
-        alone = len(bodies) == 1
+    def _snapped(self, bodies, spacing, indices=None):
+        """(key, bodies) of ``bodies`` (model bodies ``indices``) on the lattice of heights
+        ``spacing``, orientations spacing / outer radius and lateral positions reuse_lateral."""
+        indices = range(len(bodies)) if indices is None else indices
+        lattice = np.array([self.lateral, self.lateral, spacing])
         key, snapped = [], []
-        for i, b in enumerate(bodies):
+        for i, b in zip(indices, bodies):
             if b.fixed:
                 snapped.append(b)
                 continue
-            spacing = np.array([self.lateral, self.lateral, d])
-            cell = np.round(b.position / spacing)
-            position = np.array([0.0, 0.0, cell[2] * d]) if alone else cell * spacing
-            entry = (cell[2],) if alone else tuple(cell)
+            cell = np.round(b.position / lattice)
+            entry = tuple(cell)
             orientation = np.array([1.0, 0.0, 0.0, 0.0])
             if not self.spherical[i]:
-                q = np.round(b.orientation / (d / self.model.outer_radii[i]))
+                q = np.round(b.orientation / (spacing / self.model.outer_radii[i]))
                 entry += tuple(q)
                 orientation = q / np.linalg.norm(q)
             key.append(entry)
-            snapped.append(Body(b.mesh, position=position, orientation=orientation, fixed=False))
+            snapped.append(Body(b.mesh, position=cell * lattice, orientation=orientation, fixed=False))
         return tuple(key), snapped
+
+
+class _TooClose(Exception):
+    """A snapped configuration is not a valid placement (a gap below the lattice spacing)."""

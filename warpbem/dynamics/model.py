@@ -48,12 +48,16 @@ class SolverOptions:
     max_iterations: int = 600
     reuse_tolerance: float = 0.0  # m: 0 solves every state; > 0 reuses snapshots (hydrodynamics.py)
     reuse_lateral: float | None = None  # m: their lateral lattice with several bodies (None: 50 x)
+    reuse_interaction: float | None = None  # m: heights of the several-body snapshots (None: 10 x)
 
     def __post_init__(self):
         if not (np.isfinite(self.reuse_tolerance) and self.reuse_tolerance >= 0):
             raise ValueError(f"reuse_tolerance must be >= 0 (m), got {self.reuse_tolerance!r}")
         if self.reuse_lateral is not None and not (np.isfinite(self.reuse_lateral) and self.reuse_lateral > 0):
             raise ValueError(f"reuse_lateral must be > 0 (m), got {self.reuse_lateral!r}")
+        if self.reuse_interaction is not None and not (np.isfinite(self.reuse_interaction)
+                                                       and self.reuse_interaction >= self.reuse_tolerance > 0):
+            raise ValueError(f"reuse_interaction must be >= reuse_tolerance > 0 (m), got {self.reuse_interaction!r}")
 
     def build(self, flow: Flow, device) -> MobilitySolver:
         return MobilitySolver(flow.shear_rate, flow.viscosity, flow.wall, device,
