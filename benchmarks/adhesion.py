@@ -13,7 +13,8 @@
 3. the step: kinetics_fraction (k dt per step) from 0.4 to 0.025, 8 seeds each: mean distance
    to arrest and bonds at the end, against the cost;
 4. wall time per simulated second of one rolling cell (k = 4, the scene defaults) and of four
-   cells rolling side by side with full hydrodynamic interaction.
+   cells rolling side by side with full hydrodynamic interaction; (4b, part "scene") of a scene
+   file, e.g. --scene scenes/rolling_cells.toml --simulated 0.02.
 
     python benchmarks/adhesion.py [--quick] [--device cuda:0]
 
@@ -116,7 +117,7 @@ def roll(model, state, end, device):
         state, frame = sim.step(state, end)
         times.append(state.time)
         u.append(frame.velocity[:, 0])
-        bonds.append(frame.parts["bond"]["count"][0])
+        bonds.append(int(frame.parts["bond"]["count"].sum()))  # over all cells
     return dict(wall=time.perf_counter() - t0, steps=state.steps, snapshots=sim.hydro.snapshots_solved,
                 x=state.positions[:, 0], t=np.array(times), u=np.array(u), bonds=np.array(bonds))
 
@@ -222,6 +223,18 @@ def speed(device, end, cells):
     return rows
 
 
+def scene_speed(device, path, end):
+    """Wall time per simulated second of a scene file (its model and start, to ``end`` s)."""
+    from warpbem.app import scene
+
+    s = scene.load(path, [f"time.end={end}"])
+    r = roll(s.model, s.initial_state(), end, device)
+    return [dict(scene=str(path), cells=s.model.n_bodies, simulated_s=end, wall_s=r["wall"],
+                 wall_per_simulated_s=r["wall"] / end, steps=r["steps"], snapshots=r["snapshots"],
+                 mean_velocity_um_s=(r["x"] - s.initial_state().positions[:, 0]).mean() / end * 1e6,
+                 bonds_end=int(r["bonds"][-1]))]
+
+
 def chart(reuse_rows, step_rows, path):
     plt = pyplot()
     fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.5))
@@ -258,6 +271,7 @@ def main():
     parser.add_argument("--replot", action="store_true", help="only redraw the chart from the CSV tables")
     parser.add_argument("--cells", default="1,4", help="cell counts of the speed part (default 1,4)")
     parser.add_argument("--simulated", type=float, default=1.0, help="simulated seconds of the speed part")
+    parser.add_argument("--scene", help="with the part 'scene': a scene file to time (e.g. scenes/rolling_cells.toml)")
     args = parser.parse_args()
     if args.replot:
         tables = [[{k: float(v) for k, v in row.items()} for row in csv.DictReader(output(name).open())]
@@ -300,6 +314,11 @@ def main():
                            [1] if q else [int(c) for c in args.cells.split(",")])
         print_table(speed_rows)
         write_csv("adhesion_speed.csv", speed_rows)
+    if "scene" in parts:
+        print(f"\n4b. wall time per simulated second of {args.scene}")
+        scene_rows = scene_speed(args.device, args.scene, args.simulated)
+        print_table(scene_rows)
+        write_csv("adhesion_scene_speed.csv", scene_rows)
     if {"reuse", "step"} <= parts:
         print("chart:", chart(reuse_rows, step_rows, output("adhesion.png")))
 
