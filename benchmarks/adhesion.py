@@ -262,12 +262,34 @@ def chart(reuse_rows, step_rows, path):
     return path
 
 
+def interaction_chart(rows, path):
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    for heights, marker in (("opposite", "o"), ("same", "s")):
+        sel = [r for r in rows if r["heights"] == heights]
+        x = [r["lattice_nm"] for r in sel]
+        for key, colour, label in (("grand_split", "C0", "grand mobility, split"),
+                                   ("grand_interaction_only", "C1", "grand mobility, interaction snapshot only"),
+                                   ("flow_split", "C2", "motion in the flow, split"),
+                                   ("flow_interaction_only", "C3", "motion in the flow, interaction snapshot only")):
+            ax.loglog(x, [r[key] for r in sel], marker + "-", color=colour, label=f"{label} ({heights})", alpha=0.8)
+    ax.set(xlabel="height lattice of the several-body snapshots, reuse_interaction [nm]",
+           ylabel="largest change / largest entry, at 0.4 lattice off",
+           title="two cells 12 um apart rolling in line: snapshot error")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=6)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    return path
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="smaller sizes and shorter runs")
     parser.add_argument("--device", default="cpu")
-    parser.add_argument("--parts", default="kernels,reuse,step,speed",
-                        help="comma-separated parts to run: kernels, reuse (with the lateral lattice), step, speed")
+    parser.add_argument("--parts", default="kernels,reuse,interaction,step,speed",
+                        help="comma-separated parts to run: kernels, reuse (with the lateral lattice), interaction, step,"
+                             " speed, scene")
     parser.add_argument("--replot", action="store_true", help="only redraw the chart from the CSV tables")
     parser.add_argument("--cells", default="1,4", help="cell counts of the speed part (default 1,4)")
     parser.add_argument("--simulated", type=float, default=1.0, help="simulated seconds of the speed part")
@@ -277,6 +299,10 @@ def main():
         tables = [[{k: float(v) for k, v in row.items()} for row in csv.DictReader(output(name).open())]
                   for name in ("adhesion_reuse.csv", "adhesion_step.csv")]
         print("chart:", chart(*tables, output("adhesion.png")))
+        if output("adhesion_interaction.csv").exists():
+            rows = [{k: (v if k == "heights" else float(v)) for k, v in row.items()}
+                    for row in csv.DictReader(output("adhesion_interaction.csv").open())]
+            print("chart:", interaction_chart(rows, output("adhesion_interaction.png")))
         return
     parts = set(args.parts.split(","))
     q = args.quick
@@ -297,11 +323,13 @@ def main():
                                                                                            100e-9, 200e-9])
         print_table(lateral_rows)
         write_csv("adhesion_lateral.csv", lateral_rows)
+    if "interaction" in parts:
         print("\n2c. height lattice of the several-body snapshots: two cells 12 um apart along the flow")
         interaction_rows = interaction_error(args.device, 12e-6, [10e-9, 40e-9] if q else [5e-9, 10e-9, 20e-9,
                                                                                         40e-9, 80e-9])
         print_table(interaction_rows)
         write_csv("adhesion_interaction.csv", interaction_rows)
+        print("chart:", interaction_chart(interaction_rows, output("adhesion_interaction.png")))
     if "step" in parts:
         print("\n3. step (kinetics fraction; reuse 2 nm)")
         step_rows = step_chart(args.device, [0.4, 0.1, 0.025] if q else [0.4, 0.2, 0.1, 0.05, 0.025], 2 if q else 8,

@@ -133,8 +133,7 @@ class HydrodynamicSolves:
             try:
                 snapshot = self._snapshot(bodies)
             except _TooClose:  # solved exactly, not kept
-                snapshot = (Motion.of(self.solver.solve(bodies, check_placement_first=False)),
-                            self._grand_mobility(bodies))
+                snapshot = self._solved(bodies)
             flow, basis = snapshot
             u, w, f, t = basis.combine(self.body_coefficients(loads.force, loads.torque))
             motion = Motion(flow.velocity + u, flow.angular_velocity + w, flow.force + f, flow.torque + t,
@@ -196,8 +195,7 @@ class HydrodynamicSolves:
         if len(bodies) == 1:
             return self._lone(0, bodies[0], self.tolerance)
         key, snapped = self._snapped(bodies, self.interaction)
-        flow, grand = self._kept(key, snapped, lambda b: (Motion.of(self.solver.solve(b, check_placement_first=False)),
-                                                          self._grand_mobility(b)))
+        flow, grand = self._kept(key, snapped, self._solved)
         if self.interaction == self.tolerance:
             return flow, grand
         velocity, angular_velocity = flow.velocity.copy(), flow.angular_velocity.copy()
@@ -222,8 +220,11 @@ class HydrodynamicSolves:
                                        spacing, [index])
         radii = self.model.outer_radii[[index]]
         return self._kept(("lone", self.lone_of[index], spacing) + entry, [lone],
-                          lambda b: (Motion.of(self.solver.solve(b, check_placement_first=False)),
-                                     self._grand_mobility(b, radii)))
+                          lambda b: self._solved(b, radii))
+
+    def _solved(self, bodies, radii=None):
+        """A snapshot solved at ``bodies``: (flow Motion, grand mobility Responses)."""
+        return Motion.of(self.solver.solve(bodies, check_placement_first=False)), self._grand_mobility(bodies, radii)
 
     def _kept(self, key, snapped, solve):
         if key in self._snapshots:
