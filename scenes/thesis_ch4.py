@@ -19,7 +19,8 @@ Hertz contact area (mean over the run and at the end).
 Table 2 (results/adhesion_summary.csv), several rolling cells, a free cell meeting a rolling
 one, recruitment by capture, binding to an adherent cell: each adhesive free cell's state by the rule of
 ``warpbem/app/adhesion_states.py``, its mean velocity over the last half of the run (a line
-fitted to x(t)), its bonds, and how close its microvillus tips came to the wall (closest
+fitted to x(t)) and over the whole run, its velocity in the first frame (before any bond: the
+hydrodynamic velocity, where neighbours show first), its bonds, and how close its microvillus tips came to the wall (closest
 surface gap less the 175 nm tips).
 """
 
@@ -70,6 +71,7 @@ def cells(path: Path, label: str) -> list[dict]:
         half = t >= 0.5 * t[-1]
         lowest_tip = (z[:, i] - body["mesh"]["radius"]).min() - ROUGHNESS
         rows.append(dict(run=label, cell=name, state=state, velocity_um_s=np.polyfit(t[half], x[half, i], 1)[0] * 1e6,
+                         mean_velocity_um_s=(x[-1, i] - x[0, i]) / (t[-1] - t[0]) * 1e6,
                          free_velocity_um_s=u[0, i] * 1e6, bonds_max=int(bonds[:, i].max()),
                          bonds_end=int(bonds[-1, i]), lowest_tip_nm=lowest_tip * 1e9))
     return rows
