@@ -4,7 +4,10 @@ files, for scenes/README.md:
     warpbem sweep scenes/fig4_04_06_stiff_bonds.toml --output-dir results/fig4_04_06_stiff_bonds
     warpbem sweep scenes/fig4_09_11_soft_bonds.toml --output-dir results/fig4_09_11_soft_bonds
     warpbem sweep scenes/fig4_12_14_bond_cap.toml --output-dir results/fig4_12_14_bond_cap
-    warpbem sweep scenes/rolling_cells.toml --output-dir results/rolling_cells
+    warpbem run scenes/rolling_cells.toml --output results/rolling_cells.h5
+    warpbem sweep scenes/state_diagram.toml --vary adhesion.off_rate=1.0 \
+        --vary adhesion.reactive_compliance=0.6e-10 --vary adhesion.seed=2,3,4,5 \
+        --output-dir results/rolling_alone
     warpbem run scenes/free_meets_rolling.toml --output results/free_meets_rolling.h5
     warpbem sweep scenes/recruitment_capture.toml --output-dir results/recruitment_capture
     warpbem sweep scenes/collision_binding.toml --output-dir results/collision_binding
@@ -15,6 +18,11 @@ Table 1 (results/thesis_ch4.csv), solitary rolling, figs. 4.4-4.14. The thesis r
 10 ms of rolling; each run here gives the velocity at those times, when the cell came to rest
 (velocity below 1 % of the free one), the distance it rolled, its bonds at the end, and its
 Hertz contact area (mean over the run and at the end).
+
+Table 3 (results/rolling_cells.csv), several rolling cells against the lone one: each cell's
+velocity before any bond (its hydrodynamic velocity, where the neighbours act first) and its mean
+velocity from release over the trio's run (60 ms), beside the same figures of the lone cell of
+the same parameters (the state diagram's k_r0 = 1 /s, r0 = 0.6 A point, seeds 1-5).
 
 Table 2 (results/adhesion_summary.csv), several rolling cells, a free cell meeting a rolling
 one, recruitment by capture, binding to an adherent cell: each adhesive free cell's state by the rule of
@@ -77,6 +85,72 @@ def cells(path: Path, label: str) -> list[dict]:
     return rows
 
 
+def release(path: Path, label: str, window: float) -> list[dict]:
+    """Table 3 rows: each cell's velocity before any bond and its mean velocity over ``window``
+    seconds from release."""
+    with open_result(path) as f:
+        names = json.loads(f.attrs["body_names"])
+        t, x, u = f["time"][:], f["position"][:, :, 0], f["velocity"][:, :, 0]
+    if t[-1] < window * (1 - 1e-9):
+        print(f"{path}: ends at {t[-1]:g} s, before the {window:g} s window: left out")
+        return []
+    x_end = np.array([np.interp(window, t, x[:, i]) for i in range(len(names))])
+    return [dict(run=label, cell=name, bondless_um_s=u[0, i] * 1e6,
+                 mean_um_s=(x_end[i] - x[0, i]) / window * 1e6) for i, name in enumerate(names)]
+
+
+def several_rolling_chart(trio: Path, lone: list[Path], window: float, path: Path) -> Path:
+    """x(t) of the three cells and of the lone cell's seeds over the trio's run."""
+    from warpbem.app.plotting import _pyplot
+
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    with open_result(trio) as f:
+        names = json.loads(f.attrs["body_names"])
+        t, x = f["time"][:], f["position"][:, :, 0]
+    for i, name in enumerate(names):
+        ax.plot(t * 1e3, (x[:, i] - x[0, i]) * 1e6, lw=2, label=f"{name} cell of three, 12 um apart")
+    for k, p in enumerate(lone):
+        with open_result(p) as f:
+            t, x = f["time"][:], f["position"][:, 0, 0]
+        keep = t <= window * (1 + 1e-9)
+        ax.plot(t[keep] * 1e3, (x[keep] - x[0]) * 1e6, color="0.5", lw=1, label="lone cell (seeds 1-5)" if k == 0 else None)
+    ax.set(xlabel="time [ms]", ylabel="distance rolled [um]",
+           title="rigid 5 um cells on stiff bonds (k_r0 = 1 /s, r0 = 0.6 A), 100 1/s")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def several_rolling() -> list[dict]:
+    trio = ROOT / "results" / "rolling_cells.h5"
+    if not trio.exists():
+        print("rolling_cells: no run (see this script's docstring)")
+        return []
+    with open_result(trio) as f:
+        window = float(f["time"][-1])
+    lone = [ROOT / "results" / "state_diagram" / "point006.h5"] + sorted((ROOT / "results" / "rolling_alone").glob("point*.h5"))
+    rows = release(trio, "three cells 12 um apart", window)
+    for path in lone:
+        if path.exists():
+            with open_result(path) as f:
+                seed = json.loads(f.attrs["scene"])["adhesion"]["seed"]
+            rows += release(path, f"lone cell, seed {seed}", window)
+    print("chart:", several_rolling_chart(trio, [p for p in lone if p.exists()], window,
+                                          ROOT / "docs" / "figures" / "rolling_cells.png"))
+    alone = [r for r in rows if r["run"].startswith("lone")]
+    if alone:
+        for r in rows:
+            r["bondless_vs_lone"] = r["bondless_um_s"] / alone[0]["bondless_um_s"]
+        means = np.array([r["mean_um_s"] for r in alone])
+        print(f"lone cell over {window * 1e3:g} ms: mean velocity {means.mean():.1f} um/s, SD {means.std(ddof=1) if len(means) > 1 else float('nan'):.1f}"
+              f" over {len(means)} seeds")
+    return rows
+
+
 def sweep(name: str, table) -> list[dict]:
     """The rows of every point of the sweep in results/<name>."""
     summary = ROOT / "results" / name / "summary.csv"
@@ -110,7 +184,10 @@ def write(rows: list[dict], name: str):
 def main():
     write([row for name in ROLLING for row in sweep(name, rolling)], "thesis_ch4.csv")
     single = ROOT / "results" / "free_meets_rolling.h5"
-    write(sweep("rolling_cells", cells) + (cells(single, "free_meets_rolling") if single.exists() else [])
+    write(several_rolling(), "rolling_cells.csv")
+    trio = ROOT / "results" / "rolling_cells.h5"
+    write((cells(trio, "rolling_cells") if trio.exists() else [])
+          + (cells(single, "free_meets_rolling") if single.exists() else [])
           + sweep("recruitment_capture", cells) + sweep("collision_binding", cells), "adhesion_summary.csv")
 
 
