@@ -27,7 +27,8 @@ the same parameters (the state diagram's k_r0 = 1 /s, r0 = 0.6 A point, seeds 1-
 Table 2 (results/adhesion_summary.csv), several rolling cells, a free cell meeting a rolling
 one, recruitment by capture, binding to an adherent cell: each adhesive free cell's state by the rule of
 ``warpbem/app/adhesion_states.py``, its mean velocity over the last half of the run (a line
-fitted to x(t)) and over the whole run, its velocity in the first frame (before any bond: the
+fitted to x(t)) and over the whole run, the time of its first bond and its velocity from then
+on (a capture late in a run leaves the last half mostly free), its velocity in the first frame (before any bond: the
 hydrodynamic velocity, where neighbours show first), its bonds, and how close its microvillus tips came to the wall (closest
 surface gap less the 175 nm tips).
 """
@@ -78,10 +79,15 @@ def cells(path: Path, label: str) -> list[dict]:
         state, ratio = classify(t, x[:, i], bonds[:, i], u[0, i])
         half = t >= 0.5 * t[-1]
         lowest_tip = (z[:, i] - body["mesh"]["radius"]).min() - ROUGHNESS
+        bound = np.flatnonzero(bonds[:, i] > 0)
+        since = slice(bound[0], None) if len(bound) else slice(0, 0)
+        since_bond = (np.polyfit(t[since], x[since, i], 1)[0] * 1e6 if len(t[since]) >= 3 else float("nan"))
         rows.append(dict(run=label, cell=name, state=state, velocity_um_s=np.polyfit(t[half], x[half, i], 1)[0] * 1e6,
                          mean_velocity_um_s=(x[-1, i] - x[0, i]) / (t[-1] - t[0]) * 1e6,
                          free_velocity_um_s=u[0, i] * 1e6, bonds_max=int(bonds[:, i].max()),
-                         bonds_end=int(bonds[-1, i]), lowest_tip_nm=lowest_tip * 1e9))
+                         bonds_end=int(bonds[-1, i]), lowest_tip_nm=lowest_tip * 1e9,
+                         first_bond_ms=t[bound[0]] * 1e3 if len(bound) else float("nan"),
+                         velocity_since_bond_um_s=since_bond))
     return rows
 
 
