@@ -8,11 +8,13 @@ State, the step) -> ``app`` (scene files, runs, sweeps, output, command line).""
 from . import units
 from .hydro.linalg import ConvergenceError
 from .hydro.mobility import ContactResolutionWarning, MobilitySolution, MobilitySolver, solve_mobility
+from .hydro.traction import TractionSolution, solve_traction
 from .surfaces import mesh
 from .surfaces.body import Body
 from .surfaces.mesh import MeshError
 from .surfaces.placement import PlacementError
 
 __version__ = "0.1.0"
-__all__ = ["mesh", "units", "Body", "solve_mobility", "MobilitySolver", "MobilitySolution", "ConvergenceError",
+__all__ = ["mesh", "units", "Body", "solve_mobility", "MobilitySolver", "MobilitySolution", "solve_traction",
+           "TractionSolution", "ConvergenceError",
            "MeshError", "PlacementError", "ContactResolutionWarning", "__version__"]

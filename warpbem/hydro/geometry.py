@@ -24,6 +24,7 @@ class SurfaceGeometry:
     body_ranges: np.ndarray  # (n_bodies, 2) element index range of each body
     centres: np.ndarray  # (n_bodies, 3) scaled reference points
     collocation: np.ndarray  # (E, 3) element centres (node 8), the collocation points
+    collocation_normals: np.ndarray  # (E, 3) unit outward normals there
     element_radius: np.ndarray  # (E,) largest node distance from the centre node
     areas: np.ndarray  # (E,) element areas with the operator's quadrature
     qp_positions: np.ndarray  # (E, Q, 3)
@@ -50,6 +51,7 @@ class SurfaceGeometry:
             body_ranges=ranges,
             centres=np.array([b.position for b in bodies]) / length_scale,
             collocation=centre,
+            collocation_normals=quad9.centre_normals(element_nodes),
             element_radius=np.linalg.norm(element_nodes - centre[:, None], axis=-1).max(axis=1),
             areas=np.linalg.norm(area_vectors, axis=-1).sum(axis=1),
             qp_positions=positions,
@@ -81,7 +83,8 @@ class SurfaceGeometry:
             length_scale=self.length_scale, element_nodes=self.element_nodes[own],
             body_of_element=np.zeros(stop - start, dtype=self.body_of_element.dtype),
             body_ranges=np.array([[0, stop - start]]), centres=self.centres[p : p + 1],
-            collocation=self.collocation[own], element_radius=self.element_radius[own], areas=self.areas[own],
+            collocation=self.collocation[own], collocation_normals=self.collocation_normals[own],
+            element_radius=self.element_radius[own], areas=self.areas[own],
             qp_positions=self.qp_positions[own], qp_area_vectors=self.qp_area_vectors[own], order=self.order,
             unresolved_contacts={})
 
@@ -119,6 +122,7 @@ class SurfaceGeometry:
         counts = self.body_ranges[:, 1] - self.body_ranges[:, 0]
         surf = kernels.Surface()
         surf.poles = vectors(self.collocation)
+        surf.pole_normals = vectors(self.collocation_normals)
         surf.nodes = vectors(self.element_nodes)
         surf.centres = vectors(self.collocation)
         surf.radii = scalars(self.element_radius)

@@ -93,7 +93,9 @@ class MobilitySolution:
     reused_bodies: np.ndarray  # per body: operator blocks kept from the previous solve
 
 
-def _load_array(name, value, bodies):
+def _load_array(name, value, bodies, fixed_allowed: bool = False):
+    """(n, 3) loads, one row per body, checked; a fixed body's row must be zero unless
+    ``fixed_allowed`` (its load is then an input, e.g. the traction problem's)."""
     n = len(bodies)
     if value is None:
         return np.zeros((n, 3))
@@ -103,7 +105,7 @@ def _load_array(name, value, bodies):
     for i in range(n):
         if not np.all(np.isfinite(arr[i])):
             raise ValueError(f"{name}[{i}] (body {i}) is not finite: {arr[i].tolist()}")
-        if bodies[i].fixed and np.any(arr[i]):
+        if bodies[i].fixed and np.any(arr[i]) and not fixed_allowed:
             raise ValueError(
                 f"{name}[{i}]: body {i} is fixed, so its {name[:-1]} is an output of the solver;"
                 " give external loads for free bodies only"

@@ -10,6 +10,13 @@ Phan-Thien & Fan 1996), which holds for the wall kernel too because the image pa
 inside the body; it replaces the singular self-element integral, and makes the discrete
 operator annihilate rigid translations exactly.
 
+The same class gives the adjoint operator (1/2 + D*) of the traction problem (``kind =
+"adjoint_double_layer"``, ``traction.py``): I*_ab = int_{E_b} of the traction at xi_a of a point
+force at x (``kernels/assembly.py``), and its singular self element taken as the double
+layer's, I*_aa = I_aa = -1/2 - sum_{b != a in body(a)} I_ab (Phan-Thien & Fan 1996; thesis ch.
+3.3): on a sphere in free space the two integrands agree pointwise (r.n(x) = -r.n(xi) = r^2 /
+2a), elsewhere they differ by the curvature change over one element.
+
 Applied either as an assembled dense matrix (Warp assembly, NumPy BLAS on CPU, a Warp kernel on
 CUDA) or matrix-free (Warp recomputes the element integrals in every product); ``mode="auto"``
 assembles while the matrix takes at most half the device's free memory.
@@ -55,7 +62,8 @@ OPERATOR_MODES = ("auto", "dense", "matrix_free")
 class DoubleLayerOperator:
     def __init__(self, geometry: SurfaceGeometry, wall: bool, quadrature: QuadratureOptions,
                  dtype: str = "float64", device="cpu", mode: str = "auto",
-                 dense_memory_limit: float | None = None, reuse: "DoubleLayerOperator | None" = None):
+                 dense_memory_limit: float | None = None, reuse: "DoubleLayerOperator | None" = None,
+                 kind: str = "double_layer"):
         if mode not in OPERATOR_MODES:
             raise ValueError(f"operator mode must be one of {OPERATOR_MODES}, got {mode!r}")
         from ..kernels.assembly import build_kernels  # the top-level kernels/ folder, installed as warpbem.kernels
@@ -65,7 +73,10 @@ class DoubleLayerOperator:
         self.device = runtime.resolve_device(device)
         self.dtype_name = dtype
         self.np_dtype = np.float64 if dtype == "float64" else np.float32
-        self.kernels = build_kernels(runtime.dtype_of(dtype), bool(wall))
+        self.kind = kind
+        self.kernels = build_kernels(runtime.dtype_of(dtype), bool(wall), kind)
+        # the self blocks are the double layer's in either kind (module docstring)
+        self.self_block_kernels = build_kernels(runtime.dtype_of(dtype), bool(wall))
         self.geometry = geometry
         self.quadrature = quadrature
         self.size = 3 * geometry.n_elements
@@ -118,6 +129,11 @@ class DoubleLayerOperator:
                                     lambda start, stop: [start, self.surface, r, c, matrix],
                                     self.device, extra_dim=len(cols))
         host = matrix.numpy() if self.device.is_cpu else matrix.numpy().copy()
+        if self.kind != "double_layer":
+            a = self.geometry.elements_of(moved)[:, None, None]
+            k = np.arange(3)
+            host[3 * a + k[None, :, None], 3 * a + k[None, None, :]] = self._self_blocks().numpy()[a[:, 0, 0]]
+            moved = []
         for p in moved:  # self blocks from the identity; kept bodies brought theirs along
             start, stop = self.geometry.body_ranges[p]
             n = stop - start
@@ -147,7 +163,8 @@ class DoubleLayerOperator:
             return {p: np.array(host[3 * ranges[p][0] : 3 * ranges[p][1], 3 * ranges[p][0] : 3 * ranges[p][1]],
                                 dtype=np.float64) for p in bodies}
         return {p: DoubleLayerOperator(self.geometry.body(p), self.wall, self.quadrature, self.dtype_name, self.device,
-                                       "dense").assemble().numpy().astype(np.float64) for p in bodies}
+                                       "dense", kind=self.kind).assemble().numpy().astype(np.float64)
+                for p in bodies}
 
     def _self_blocks(self):
         """Matrix-free diagonal blocks, -sum over the other elements of the same body."""
@@ -156,7 +173,7 @@ class DoubleLayerOperator:
             n = self.geometry.n_elements
             sums = wp.zeros(n, dtype=self.kernels.green.mat33, device=self.device)
             runtime.launch_rows(
-                self.kernels.same_body_row_sums, n,
+                self.self_block_kernels.same_body_row_sums, n,
                 lambda start, stop: [start, self.surface, sums[start:stop]],
                 self.device,
             )

@@ -63,3 +63,10 @@ def surface_quadrature(element_nodes: np.ndarray, order: int):
     x_s = np.einsum("qa,eai->eqi", ns, element_nodes)
     x_t = np.einsum("qa,eai->eqi", nt, element_nodes)
     return positions, np.cross(x_s, x_t) * weights[None, :, None]
+
+
+def centre_normals(element_nodes: np.ndarray) -> np.ndarray:
+    """Unit outward normals (E, 3) at the element centres (s = t = 0), the collocation points."""
+    _, ns, nt = shape_functions(np.zeros(1), np.zeros(1))
+    normal = np.cross(np.einsum("qa,eai->eqi", ns, element_nodes), np.einsum("qa,eai->eqi", nt, element_nodes))[:, 0]
+    return normal / np.linalg.norm(normal, axis=1, keepdims=True)

@@ -1,0 +1,151 @@
+"""Surface traction on rigid bodies: the Completed Adjoint Double Layer (thesis ch. 2.2 B, eq.
+2.18-2.25; Phan-Thien & Fan 1995).
+
+The flow outside rigid bodies is the single layer of their surface traction t (the force per
+area the fluid exerts), u = u_inf - int G t dS (eq. 2.18), G the wall Green's function when the
+wall is on. Its traction on the surface, from outside, gives a second-kind equation for t alone
+(eq. 2.21, halved):
+
+    (1/2 + D*) t = t_inf,     (D* t)(xi) = PV int n(xi) . Sigma(xi; x) t(x) dS(x),
+
+Sigma(xi; x) the stress at xi of the (wall) Stokeslet at x (``kernels/assembly.py``, kind
+"adjoint_double_layer"), t_inf = sigma_inf . n the ambient traction (u_inf = gdot z e_x:
+sigma_inf = mu gdot (e_x e_z + e_z e_x)). Inside a rigid body the flow is a rigid motion,
+whose stress vanishes, so no velocity enters: the rigid motions' eigenvalue -1 of D*
+(eq. 2.21) leaves six free modes per body, fixed by the body's force and torque (eq.
+2.22-2.24): with phi^(p,m) the rigid modes of body p orthonormalised over its surface (as in
+the CDL solve),
+
+    (1/2 + D*) t + sum_{p,m} phi^(p,m) <phi^(p,m), t> = t_inf + sum_{p,m} phi^(p,m) c^(p,m),
+
+where c^p = L_p^-1 (F_p, T_p) are the coordinates of the fluid's force and torque on body p in
+those modes (F = int t dS, T = int (x - x_p) x t dS). Unlike the double layer, only the -1
+eigenvalue needs the deflation (Phan-Thien & Fan 1996). Taking <phi, .> of the equation shows
+int t dS = F to the discretisation error of the adjoint identity <phi, (1/2 + D*) t> = 0.
+
+Units: the kernels see lengths over the bodies' mean radius L and tractions over a scale
+sigma_0 (the largest of mu |gdot|, |F| / L^2, |T| / L^3); the solution is in Pa.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse.linalg as spla
+
+from ..surfaces.body import Body
+from ..surfaces.placement import check_placement
+from .geometry import SurfaceGeometry
+from .linalg import gmres
+from .mobility import DEFAULT_TOLERANCE, _finite, _load_array
+from .operators import DoubleLayerOperator, QuadratureOptions
+
+
+@dataclass(frozen=True)
+class TractionSolution:
+    """traction: (E, 3) Pa at the collocation points (element centres, ``points``, m) of all
+    bodies' elements (after contact refinement), ``areas`` (E,) m^2, ``body_of_element`` (E,);
+    force, torque (n, 3): the integrated traction of each body (N, N m, torque about its
+    reference point), the fluid's load on it; GMRES iterations and residual."""
+
+    traction: np.ndarray
+    points: np.ndarray
+    normals: np.ndarray
+    areas: np.ndarray
+    body_of_element: np.ndarray
+    force: np.ndarray
+    torque: np.ndarray
+    iterations: int
+    residual: float
+    shear_rate: float
+    viscosity: float
+    _single_layer: tuple = field(repr=False, compare=False)  # (operator, Gauss points, their loads), scaled
+
+    def of_body(self, p: int) -> np.ndarray:
+        """(E_p, 3) traction on body p's elements, Pa."""
+        return self.traction[self.body_of_element == p]
+
+    def velocity(self, points) -> np.ndarray:
+        """(m, 3) velocity (m/s) of eq. 2.18, u = u_inf - int G t dS / mu, at ``points`` (m, 3)
+        off the surfaces: in the fluid the flow, inside a body its rigid motion (the interior
+        flow of a rigid body), by Gauss quadrature of the element tractions (accurate farther
+        than about one element from the surface)."""
+        operator, poles, loads, length, stress_scale = self._single_layer
+        points = np.atleast_2d(np.asarray(points, dtype=float))
+        disturbance = operator.point_force_velocity(points / length, poles, loads)
+        ambient = np.zeros_like(points)
+        ambient[:, 0] = self.shear_rate * points[:, 2]
+        return ambient - disturbance * stress_scale * length / self.viscosity
+
+
+def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wall: bool = True,
+                   forces=None, torques=None, device="cpu", *, quadrature_order: int = 2,
+                   tolerance: float | None = None, max_iterations: int = 600, dtype: str = "float64",
+                   operator: str = "auto", contact_refinement: float = 3.0) -> TractionSolution:
+    """Traction on every rigid body (SI units) in the flow u = shear_rate z e_x (Pa s viscosity,
+    no-slip wall z = 0 when ``wall``), given each body's external load ``forces``, ``torques``
+    ((n, 3) N, N m, as ``MobilitySolution.force/torque``: for a free body the loads applied to
+    it, for a fixed one the load that holds it): at rest in Stokes flow the fluid's load on a
+    body is minus its external load. Options as for ``solve_mobility``."""
+    bodies = list(bodies)
+    if not bodies:
+        raise ValueError("bodies must contain at least one Body")
+    for i, b in enumerate(bodies):
+        if not isinstance(b, Body):
+            raise TypeError(f"bodies[{i}] must be a warpbem.Body, got {type(b).__name__}")
+    shear_rate = _finite("shear_rate", shear_rate)
+    viscosity = _finite("viscosity", viscosity, positive=True)
+    if dtype not in DEFAULT_TOLERANCE:
+        raise ValueError(f"dtype must be one of {sorted(DEFAULT_TOLERANCE)}, got {dtype!r}")
+    fluid_force = -_load_array("forces", forces, bodies, fixed_allowed=True)
+    fluid_torque = -_load_array("torques", torques, bodies, fixed_allowed=True)
+    check_placement(bodies, wall)
+
+    length = float(np.mean([b.mesh.equivalent_radius() for b in bodies]))
+    scale = max(viscosity * abs(shear_rate), np.abs(fluid_force).max() / length**2,
+                np.abs(fluid_torque).max() / length**3)
+    scale = scale if scale > 0 else 1.0
+    geometry = SurfaceGeometry.from_bodies(bodies, quadrature_order, length, wall, contact_refinement)
+    adjoint = DoubleLayerOperator(geometry, wall, QuadratureOptions(order=quadrature_order), dtype, device,
+                                  operator, kind="adjoint_double_layer")
+    weights = np.repeat(geometry.areas, 3)
+    ranges = [slice(3 * a, 3 * b) for a, b in geometry.body_ranges]
+    modes, rhs = [], np.zeros(3 * geometry.n_elements)
+    # ambient traction sigma_inf . n, scaled
+    normals = geometry.collocation_normals
+    ambient = viscosity * shear_rate / scale * np.stack(
+        [normals[:, 2], np.zeros(len(normals)), normals[:, 0]], axis=1)
+    rhs += ambient.ravel()
+    for p, rows in enumerate(ranges):
+        raw = geometry.rigid_modes(p)
+        factor = np.linalg.cholesky(raw.T @ (weights[rows, None] * raw))
+        phi = scipy.linalg.solve_triangular(factor, raw.T, lower=True).T  # <phi_k, phi_l> = delta_kl
+        modes.append(phi)
+        loads = np.concatenate([fluid_force[p] / (scale * length**2), fluid_torque[p] / (scale * length**3)])
+        rhs[rows] += phi @ scipy.linalg.solve_triangular(factor, loads, lower=True)
+
+    def matvec(t):
+        out = adjoint.matvec(t)
+        for phi, rows in zip(modes, ranges):
+            out[rows] += phi @ (phi.T @ (weights[rows] * t[rows]))
+        return out
+
+    size = 3 * geometry.n_elements
+    result = gmres(spla.LinearOperator((size, size), matvec=matvec, dtype=float), rhs,
+                   tolerance=DEFAULT_TOLERANCE[dtype] if tolerance is None else tolerance,
+                   max_iterations=max_iterations)
+    traction = result.solution.reshape(-1, 3) * scale
+    areas = geometry.areas * length**2
+    points = geometry.collocation * length
+    force = np.zeros((len(bodies), 3))
+    torque = np.zeros((len(bodies), 3))
+    for p, (a, b) in enumerate(geometry.body_ranges):
+        force[p] = (areas[a:b, None] * traction[a:b]).sum(axis=0)
+        torque[p] = (areas[a:b, None] * np.cross(points[a:b] - bodies[p].position, traction[a:b])).sum(axis=0)
+    weights = np.linalg.norm(geometry.qp_area_vectors, axis=-1)  # (E, Q), scaled
+    loads = (result.solution.reshape(-1, 1, 3) * weights[..., None]).reshape(-1, 3)
+    return TractionSolution(traction, points, normals.copy(), areas, geometry.body_of_element.copy(), force, torque,
+                            result.iterations, result.residual, shear_rate, viscosity,
+                            (adjoint, geometry.qp_positions.reshape(-1, 3), loads, length, scale))
