@@ -82,7 +82,8 @@ def test_near_the_wall_the_traction_moves_a_free_sphere_as_the_mobility_solve_do
 def test_a_held_sphere_at_the_wall_rests_inside_and_its_traction_converges():
     """A sphere held at h/a = 1.1 in wall shear, loads from the CDL solve: the interior velocity
     of eq. 2.18 is 4.3e-3 of gdot h a at k = 4 and 1.1e-3 at k = 8 (measured), and the traction
-    integrates to minus the holding force to 1.6e-3 and 1.8e-4."""
+    integrates to minus the holding force to 1.6e-3 and 1.8e-4, to minus the holding torque to
+    3.7e-3 and 1.4e-3."""
     errors = []
     for k in (4, 8):
         body = Body(wb.mesh.sphere(A, k), position=(0.0, 0.0, 1.1 * A), fixed=True)
@@ -90,10 +91,12 @@ def test_a_held_sphere_at_the_wall_rests_inside_and_its_traction_converges():
         s = solve_traction([body], SHEAR, MU, forces=held.force, torques=held.torque)
         interior = np.abs(s.velocity(interior_points(body))).max() / (SHEAR * 1.1 * A)
         force = np.abs(s.force[0] + held.force[0]).max() / np.abs(held.force[0]).max()
-        errors.append((interior, force))
-    (coarse, coarse_force), (fine, fine_force) = errors
+        torque = np.abs(s.torque[0] + held.torque[0]).max() / np.abs(held.torque[0]).max()
+        errors.append((interior, force, torque))
+    (coarse, coarse_force, coarse_torque), (fine, fine_force, fine_torque) = errors
     assert coarse < 6e-3 and fine < 0.4 * coarse
     assert coarse_force < 3e-3 and fine_force < 0.3 * coarse_force
+    assert coarse_torque < 6e-3 and fine_torque < 0.5 * coarse_torque
 
 
 @pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
@@ -113,3 +116,26 @@ def test_two_spheres_near_the_wall_each_move_as_the_mobility_solve_says():
         assert np.abs(velocity - mobility.velocity[p]).max() < 1e-2 * speed
         np.testing.assert_allclose(s.force[p], -forces[p], rtol=0,
                                    atol=5e-3 * 6 * np.pi * MU * A * SHEAR * body.position[2])
+
+
+def test_an_extra_contact_traction_is_balanced_by_the_fluid():
+    """A Hertz pressure p0 sqrt(1 - rho^2 / a_c^2) (thesis eq. 4.8-4.9; a_c = 2 um, p0 = 10 Pa)
+    pushes the bottom of a free sphere in still, unbounded fluid: it is an external force F_c
+    on the sphere (the applied pressure integrated over the elements), so the fluid's traction
+    is Stokes's uniform -F_c / (4 pi a^2) (to 1e-2 of it at k = 8; 3.2e-3 measured), and the total traction
+    (fluid plus contact) is in balance."""
+    contact_radius, peak = 2e-6, 10.0
+
+    def hertz(points, normals):
+        rho2 = points[:, 0] ** 2 + points[:, 1] ** 2
+        inside = (points[:, 2] < 0) & (rho2 < contact_radius**2)
+        pressure = np.where(inside, peak * np.sqrt(np.clip(1 - rho2 / contact_radius**2, 0, None)), 0.0)
+        return pressure[:, None] * np.array([0.0, 0.0, 1.0])
+
+    s = solve_traction([Body(wb.mesh.sphere(A, 8))], 0.0, MU, wall=False, extra_traction=hertz)
+    applied = (s.areas[:, None] * (s.total_traction - s.traction)).sum(axis=0)
+    assert applied[2] > 0.5 * peak * np.pi * contact_radius**2  # the patch is resolved
+    uniform = -applied / (4 * np.pi * A**2)
+    assert np.abs(s.traction - uniform).max() < 1e-2 * np.abs(uniform).max()
+    np.testing.assert_allclose(s.force[0], -applied, rtol=0, atol=1e-3 * applied[2])
+    assert np.abs((s.areas[:, None] * s.total_traction).sum(axis=0)).max() < 1e-3 * applied[2]

@@ -23,6 +23,13 @@ those modes (F = int t dS, T = int (x - x_p) x t dS). Unlike the double layer, o
 eigenvalue needs the deflation (Phan-Thien & Fan 1996). Taking <phi, .> of the equation shows
 int t dS = F to the discretisation error of the adjoint identity <phi, (1/2 + D*) t> = 0.
 
+Extra tractions (a Hertz contact, thesis eq. 4.8; lubrication, eq. 3.4-3.8) act on the surface
+besides the fluid's: ``extra_traction`` t_c (E, 3) per element. The body's balance then reads
+F_fluid = -(F_ext + int t_c dS), and the solution's ``total_traction`` is t + t_c, the load the
+elastic solve needs. The thesis adds t_c to the right-hand side of eq. 2.25 and solves for the
+total; by linearity that is (1/2 + D*) (t + t_c) = t_inf + (1/2 + D*) t_c (deflated alike),
+the same solution, which here costs no extra product.
+
 Units: the kernels see lengths over the bodies' mean radius L and tractions over a scale
 sigma_0 (the largest of mu |gdot|, |F| / L^2, |T| / L^3); the solution is in Pa.
 """
@@ -51,6 +58,7 @@ class TractionSolution:
     reference point), the fluid's load on it; GMRES iterations and residual."""
 
     traction: np.ndarray
+    total_traction: np.ndarray  # fluid traction plus the extra traction given, Pa
     points: np.ndarray
     normals: np.ndarray
     areas: np.ndarray
@@ -81,14 +89,17 @@ class TractionSolution:
 
 
 def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wall: bool = True,
-                   forces=None, torques=None, device="cpu", *, quadrature_order: int = 2,
+                   forces=None, torques=None, device="cpu", *, extra_traction=None, quadrature_order: int = 2,
                    tolerance: float | None = None, max_iterations: int = 600, dtype: str = "float64",
                    operator: str = "auto", contact_refinement: float = 3.0) -> TractionSolution:
     """Traction on every rigid body (SI units) in the flow u = shear_rate z e_x (Pa s viscosity,
     no-slip wall z = 0 when ``wall``), given each body's external load ``forces``, ``torques``
     ((n, 3) N, N m, as ``MobilitySolution.force/torque``: for a free body the loads applied to
     it, for a fixed one the load that holds it): at rest in Stokes flow the fluid's load on a
-    body is minus its external load. Options as for ``solve_mobility``."""
+    body is minus its external load and of any ``extra_traction`` (Pa, e.g. a contact's; module
+    docstring): an (E, 3) array over the elements after contact refinement, or a function of
+    the collocation points and their unit normals ((E, 3) each, m) that returns one. Options as for
+    ``solve_mobility``."""
     bodies = list(bodies)
     if not bodies:
         raise ValueError("bodies must contain at least one Body")
@@ -104,14 +115,24 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wal
     check_placement(bodies, wall)
 
     length = float(np.mean([b.mesh.equivalent_radius() for b in bodies]))
+    geometry = SurfaceGeometry.from_bodies(bodies, quadrature_order, length, wall, contact_refinement)
+    weights = np.repeat(geometry.areas, 3)
+    ranges = [slice(3 * a, 3 * b) for a, b in geometry.body_ranges]
+    if callable(extra_traction):
+        extra_traction = extra_traction(geometry.collocation * length, geometry.collocation_normals)
+    extra = np.zeros((geometry.n_elements, 3)) if extra_traction is None else np.asarray(extra_traction, dtype=float)
+    if extra.shape != (geometry.n_elements, 3) or not np.all(np.isfinite(extra)):
+        raise ValueError(f"extra_traction must be finite with shape ({geometry.n_elements}, 3), one row per element"
+                         f" after contact refinement; got {extra.shape}")
+    for p, (a, b) in enumerate(geometry.body_ranges):
+        arm = (geometry.collocation[a:b] - geometry.centres[p]) * length
+        fluid_force[p] -= (geometry.areas[a:b, None] * length**2 * extra[a:b]).sum(axis=0)
+        fluid_torque[p] -= (geometry.areas[a:b, None] * length**2 * np.cross(arm, extra[a:b])).sum(axis=0)
     scale = max(viscosity * abs(shear_rate), np.abs(fluid_force).max() / length**2,
                 np.abs(fluid_torque).max() / length**3)
     scale = scale if scale > 0 else 1.0
-    geometry = SurfaceGeometry.from_bodies(bodies, quadrature_order, length, wall, contact_refinement)
     adjoint = DoubleLayerOperator(geometry, wall, QuadratureOptions(order=quadrature_order), dtype, device,
                                   operator, kind="adjoint_double_layer")
-    weights = np.repeat(geometry.areas, 3)
-    ranges = [slice(3 * a, 3 * b) for a, b in geometry.body_ranges]
     modes, rhs = [], np.zeros(3 * geometry.n_elements)
     # ambient traction sigma_inf . n, scaled
     normals = geometry.collocation_normals
@@ -146,6 +167,6 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wal
         torque[p] = (areas[a:b, None] * np.cross(points[a:b] - bodies[p].position, traction[a:b])).sum(axis=0)
     weights = np.linalg.norm(geometry.qp_area_vectors, axis=-1)  # (E, Q), scaled
     loads = (result.solution.reshape(-1, 1, 3) * weights[..., None]).reshape(-1, 3)
-    return TractionSolution(traction, points, normals.copy(), areas, geometry.body_of_element.copy(), force, torque,
+    return TractionSolution(traction, traction + extra, points, normals.copy(), areas, geometry.body_of_element.copy(), force, torque,
                             result.iterations, result.residual, shear_rate, viscosity,
                             (adjoint, geometry.qp_positions.reshape(-1, 3), loads, length, scale))
