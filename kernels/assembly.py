@@ -8,7 +8,18 @@ precisions and both operators share one source. ``kind`` is the integrand:
 * "adjoint_double_layer": the traction at the pole xi_a (normal n_a) of a point force at x,
   the transpose of ``double_layer(xi_a, n_a dS, x)``: the stress of the wall Stokeslet at x,
   evaluated at xi_a, the adjoint kernel K* of the traction problem (thesis eq. 2.19-2.21;
-  Phan-Thien & Fan 1995).
+  Phan-Thien & Fan 1995);
+* "single_layer": ``stokeslet(xi_a, ., x) dS``, the velocity (times viscosity) at the pole of
+  a force density at x (thesis eq. 2.18);
+* "inverse_distance": I / |x - xi_a| dS, which with the free-space single layer makes the
+  Kelvinlet of the elastic problem (eq. 2.26, 2.31): (3 - 4 nu) I / r + r r / r^3 = (2 - 4 nu)
+  I / r + 8 pi G_stokes.
+
+The single layers are weakly singular (1 / r) on the self element, where they are integrated
+by ``self_integral``: the parameter square split at the collocation point (s = t = 0) into
+four triangles, each mapped from the unit square by the Duffy transform (s, t) = u (P1 + v
+(P2 - P1)), whose Jacobian u cancels the 1 / r (Duffy 1982), and a Gauss rule of twice the
+element order (at least 4) in u and v.
 
 Element integrals  I_ab = int_{E_b} f(x, n(x), xi_a) dS(x)  use
 * the precomputed tensor Gauss points of element b when xi_a (and, above a wall, its image
@@ -33,7 +44,7 @@ from .elements import make_element_functions
 from .greens import make_green_functions
 
 
-KINDS = ("double_layer", "adjoint_double_layer")
+KINDS = ("double_layer", "adjoint_double_layer", "single_layer", "inverse_distance")
 
 
 @functools.lru_cache(maxsize=None)
@@ -55,6 +66,8 @@ def make_surface(dtype):
         n_qp: int
         gauss_x: wp.array(dtype=dtype)  # 1-D Gauss rule on [-1, 1] for the sub-panels
         gauss_w: wp.array(dtype=dtype)
+        duffy_x: wp.array(dtype=dtype)  # 1-D Gauss rule of the self element's Duffy triangles
+        duffy_w: wp.array(dtype=dtype)
         near_factor: dtype
         max_level: int  # 0: no subdivision
         body_start: wp.array(dtype=int)  # element range of each element's own body
@@ -70,14 +83,17 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer") -> SimpleNamesp
     g = make_green_functions(dtype, wall)
     vec3, mat33 = g.vec3, g.mat33
     Surface = make_surface(dtype)
-    adjoint = kind == "adjoint_double_layer"
 
     quad9_point = make_element_functions(dtype).quad9_point
 
     @wp.func
     def integrand(x: vec3, area_vector: vec3, pole: vec3, pole_normal: vec3):
-        if wp.static(adjoint):
+        if wp.static(kind == "adjoint_double_layer"):
             return wp.transpose(g.double_layer(pole, pole_normal * wp.length(area_vector), x))
+        if wp.static(kind == "single_layer"):
+            return g.stokeslet(pole, pole_normal, x) * wp.length(area_vector)
+        if wp.static(kind == "inverse_distance"):
+            return wp.identity(3, dtype) * (wp.length(area_vector) / wp.length(x - pole))
         return g.double_layer(x, area_vector, pole)
 
     @wp.func
@@ -148,6 +164,42 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer") -> SimpleNamesp
                 ix -= 1
                 iy += 1
         return acc
+
+    @wp.func
+    def self_integral(surf: Surface, element: int):
+        """The kernel over an element at its own collocation point (s = t = 0), by four Duffy
+        triangles (module docstring); for the weakly singular single layers."""
+        pole = surf.poles[element]
+        pole_normal = surf.pole_normals[element]
+        acc = mat33()
+        n_gauss = surf.duffy_x.shape[0]
+        one = dtype(1.0)
+        half = dtype(0.5)
+        for side in range(4):
+            # corners of the square, counter-clockwise: (-1,-1) (1,-1) (1,1) (-1,1)
+            c1 = side
+            c2 = (side + 1) % 4
+            s1 = dtype(2 * ((c1 + 1) // 2 % 2) - 1)
+            t1 = dtype(2 * (c1 // 2) - 1)
+            s2 = dtype(2 * ((c2 + 1) // 2 % 2) - 1)
+            t2 = dtype(2 * (c2 // 2) - 1)
+            det = s1 * (t2 - t1) - t1 * (s2 - s1)
+            for i in range(n_gauss):
+                u = half * (surf.duffy_x[i] + one)
+                for j in range(n_gauss):
+                    v = half * (surf.duffy_x[j] + one)
+                    s = u * (s1 + v * (s2 - s1))
+                    t = u * (t1 + v * (t2 - t1))
+                    x, area_vector = quad9_point(surf.nodes, element, s, t)
+                    weight = surf.duffy_w[i] * surf.duffy_w[j] * dtype(0.25) * u * wp.abs(det)
+                    acc += integrand(x, area_vector * weight, pole, pole_normal)
+        return acc
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def self_blocks(row_offset: int, surf: Surface, out: wp.array(dtype=mat33)):
+        """out[a] = the kernel over element a at its own collocation point (single layers)."""
+        ia = wp.tid()
+        out[ia] = self_integral(surf, row_offset + ia)
 
     @wp.kernel(enable_backward=False, module="unique")
     def assemble_entries(row_offset: int, surf: Surface, rows: wp.array(dtype=int),
@@ -230,6 +282,7 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer") -> SimpleNamesp
         gather_entries=gather_entries,
         apply_matrix_free=apply_matrix_free,
         same_body_row_sums=same_body_row_sums,
+        self_blocks=self_blocks,
         point_force_velocity=point_force_velocity,
         quad9_point=quad9_point,
     )

@@ -131,6 +131,9 @@ class SurfaceGeometry:
         surf.n_qp = self.order**2
         surf.gauss_x = scalars(gauss_x)
         surf.gauss_w = scalars(gauss_w)
+        duffy_x, duffy_w = np.polynomial.legendre.leggauss(max(4, 2 * self.order))
+        surf.duffy_x = scalars(duffy_x)
+        surf.duffy_w = scalars(duffy_w)
         surf.near_factor = dtype(quadrature.near_factor)
         surf.max_level = quadrature.max_level if quadrature.adaptive else 0
         surf.body_start = scalars(np.repeat(self.body_ranges[:, 0], counts).astype(np.int32), int)

@@ -17,6 +17,9 @@ layer's, I*_aa = I_aa = -1/2 - sum_{b != a in body(a)} I_ab (Phan-Thien & Fan 19
 3.3): on a sphere in free space the two integrands agree pointwise (r.n(x) = -r.n(xi) = r^2 /
 2a), elsewhere they differ by the curvature change over one element.
 
+The single layers (``kind = "single_layer"``, the Stokeslet; ``"inverse_distance"``, for the
+Kelvinlet) have no 1/2: their weakly singular self element is integrated by Duffy triangles.
+
 Applied either as an assembled dense matrix (Warp assembly, NumPy BLAS on CPU, a Warp kernel on
 CUDA) or matrix-free (Warp recomputes the element integrals in every product); ``mode="auto"``
 assembles while the matrix takes at most half the device's free memory.
@@ -57,6 +60,7 @@ class QuadratureOptions:
 
 
 OPERATOR_MODES = ("auto", "dense", "matrix_free")
+SINGLE_LAYERS = ("single_layer", "inverse_distance")
 
 
 class DoubleLayerOperator:
@@ -129,7 +133,7 @@ class DoubleLayerOperator:
                                     lambda start, stop: [start, self.surface, r, c, matrix],
                                     self.device, extra_dim=len(cols))
         host = matrix.numpy() if self.device.is_cpu else matrix.numpy().copy()
-        if self.kind != "double_layer":
+        if self.kind != "double_layer":  # self blocks: the double layer's rows sums, or Duffy's
             a = self.geometry.elements_of(moved)[:, None, None]
             k = np.arange(3)
             host[3 * a + k[None, :, None], 3 * a + k[None, None, :]] = self._self_blocks().numpy()[a[:, 0, 0]]
@@ -167,17 +171,17 @@ class DoubleLayerOperator:
                 for p in bodies}
 
     def _self_blocks(self):
-        """Matrix-free diagonal blocks, -sum over the other elements of the same body."""
+        """Diagonal blocks: for the double layer and its adjoint -(sum over the other elements
+        of the same body) of the double layer; for the single layers the Duffy integral."""
         if self._diagonal is None:
             wp = self._wp
             n = self.geometry.n_elements
-            sums = wp.zeros(n, dtype=self.kernels.green.mat33, device=self.device)
-            runtime.launch_rows(
-                self.self_block_kernels.same_body_row_sums, n,
-                lambda start, stop: [start, self.surface, sums[start:stop]],
-                self.device,
-            )
-            self._diagonal = wp.array(-sums.numpy(), dtype=self.kernels.green.mat33, device=self.device)
+            blocks = wp.zeros(n, dtype=self.kernels.green.mat33, device=self.device)
+            singular = self.kind in SINGLE_LAYERS
+            kernel = self.kernels.self_blocks if singular else self.self_block_kernels.same_body_row_sums
+            runtime.launch_rows(kernel, n, lambda start, stop: [start, self.surface, blocks[start:stop]], self.device)
+            self._diagonal = wp.array(blocks.numpy() * (1.0 if singular else -1.0), dtype=self.kernels.green.mat33,
+                                      device=self.device)
         return self._diagonal
 
     def matvec(self, density: np.ndarray) -> np.ndarray:

@@ -87,6 +87,18 @@ class TractionSolution:
         ambient[:, 0] = self.shear_rate * points[:, 2]
         return ambient - disturbance * stress_scale * length / self.viscosity
 
+    def surface_velocity(self) -> np.ndarray:
+        """(E, 3) velocity (m/s) of eq. 2.18 on the surface, at the collocation points: the
+        rigid motion of each body, to the discretisation error (the single layer's weakly
+        singular self element by Duffy triangles, ``kernels/assembly.py``)."""
+        operator, _, _, length, stress_scale = self._single_layer
+        single = DoubleLayerOperator(operator.geometry, operator.wall, operator.quadrature, operator.dtype_name,
+                                     operator.device, operator.mode, kind="single_layer")
+        disturbance = single.matvec(self.traction.ravel() / stress_scale).reshape(-1, 3)
+        ambient = np.zeros_like(self.points)
+        ambient[:, 0] = self.shear_rate * self.points[:, 2]
+        return ambient - disturbance * stress_scale * length / self.viscosity
+
 
 def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wall: bool = True,
                    forces=None, torques=None, device="cpu", *, extra_traction=None, quadrature_order: int = 2,
