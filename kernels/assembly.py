@@ -15,6 +15,11 @@ precisions and both operators share one source. ``kind`` is the integrand:
   Kelvinlet of the elastic problem (eq. 2.26, 2.31): (3 - 4 nu) I / r + r r / r^3 = (2 - 4 nu)
   I / r + 8 pi G_stokes.
 
+* "elastic_rotation" and "elastic_dyadic": the two Poisson-ratio-free parts of the traction
+  kernel of the Kelvinlet (free space; Brebbia & Dominguez 1992, thesis eq. 2.26), with r = x -
+  xi_a and n dS at x, p* = -[(1 - 2 nu) Q + 3 P] / (8 pi (1 - nu)),
+  Q = [I (r.n) - (r n^T - n r^T)] / r^3 and P = r r^T (r.n) / r^5.
+
 The single layers are weakly singular (1 / r) on the self element, where they are integrated
 by ``self_integral``: the parameter square split at the collocation point (s = t = 0) into
 four triangles, each mapped from the unit square by the Duffy transform (s, t) = u (P1 + v
@@ -44,7 +49,8 @@ from .elements import make_element_functions
 from .greens import make_green_functions
 
 
-KINDS = ("double_layer", "adjoint_double_layer", "single_layer", "inverse_distance")
+KINDS = ("double_layer", "adjoint_double_layer", "single_layer", "inverse_distance", "elastic_rotation",
+         "elastic_dyadic")
 
 
 @functools.lru_cache(maxsize=None)
@@ -94,6 +100,14 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer") -> SimpleNamesp
             return g.stokeslet(pole, pole_normal, x) * wp.length(area_vector)
         if wp.static(kind == "inverse_distance"):
             return wp.identity(3, dtype) * (wp.length(area_vector) / wp.length(x - pole))
+        if wp.static(kind == "elastic_rotation" or kind == "elastic_dyadic"):
+            r = x - pole
+            inv_r = dtype(1.0) / wp.length(r)
+            rn = wp.dot(r, area_vector)
+            if wp.static(kind == "elastic_rotation"):
+                return (wp.identity(3, dtype) * rn - wp.outer(r, area_vector) + wp.outer(area_vector, r)) * (
+                    inv_r * inv_r * inv_r)
+            return wp.outer(r, r) * (rn * inv_r * inv_r * inv_r * inv_r * inv_r)
         return g.double_layer(x, area_vector, pole)
 
     @wp.func

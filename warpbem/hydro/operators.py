@@ -61,6 +61,8 @@ class QuadratureOptions:
 
 OPERATOR_MODES = ("auto", "dense", "matrix_free")
 SINGLE_LAYERS = ("single_layer", "inverse_distance")
+# kinds whose self block follows from the rigid-translation identity of their own row sums
+IDENTITY_KINDS = ("double_layer", "elastic_rotation", "elastic_dyadic")
 
 
 class DoubleLayerOperator:
@@ -133,7 +135,7 @@ class DoubleLayerOperator:
                                     lambda start, stop: [start, self.surface, r, c, matrix],
                                     self.device, extra_dim=len(cols))
         host = matrix.numpy() if self.device.is_cpu else matrix.numpy().copy()
-        if self.kind != "double_layer":  # self blocks: the double layer's rows sums, or Duffy's
+        if self.kind not in IDENTITY_KINDS:  # self blocks: the double layer's rows sums, or Duffy's
             a = self.geometry.elements_of(moved)[:, None, None]
             k = np.arange(3)
             host[3 * a + k[None, :, None], 3 * a + k[None, None, :]] = self._self_blocks().numpy()[a[:, 0, 0]]
@@ -178,7 +180,8 @@ class DoubleLayerOperator:
             n = self.geometry.n_elements
             blocks = wp.zeros(n, dtype=self.kernels.green.mat33, device=self.device)
             singular = self.kind in SINGLE_LAYERS
-            kernel = self.kernels.self_blocks if singular else self.self_block_kernels.same_body_row_sums
+            own = self.kernels if self.kind in IDENTITY_KINDS else self.self_block_kernels
+            kernel = self.kernels.self_blocks if singular else own.same_body_row_sums
             runtime.launch_rows(kernel, n, lambda start, stop: [start, self.surface, blocks[start:stop]], self.device)
             self._diagonal = wp.array(blocks.numpy() * (1.0 if singular else -1.0), dtype=self.kernels.green.mat33,
                                       device=self.device)
