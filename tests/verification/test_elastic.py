@@ -58,3 +58,18 @@ def test_a_traction_out_of_balance_is_reported():
     assert elastic.solve(lambda x, n: n @ STRESS).imbalance < 1e-12
     with pytest.raises(ElasticInputError, match="traction must be finite with shape"):
         elastic.solve(np.zeros((3, 3)))
+
+
+def test_a_free_sphere_in_shear_strains_as_its_fluid_traction_says():
+    """The chain traction -> displacement: a force- and torque-free sphere in unbounded shear
+    carries t = 5 mu E . n (the boundary value of the uniform stress 5 mu E, test_traction.py),
+    so it strains uniformly, u = 5 mu E x / (2 G) (E traceless): the traction problem's solution,
+    mapped to the cell's mesh, gives it to 2.5e-2 at k = 4 (1.5e-2 measured; 8.2e-3 at k = 8)."""
+    body = Body(wb.mesh.sphere(A, 4))
+    viscosity, shear = 1e-3, 100.0
+    traction = wb.solve_traction([body], shear, viscosity, wall=False)
+    u = InteriorElasticity(body, G, NU).solve(traction.on_mesh(0))
+    rate = 0.5 * shear * np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    exact = u.points @ (5 * viscosity * rate / (2 * G)).T
+    assert np.abs(u.displacement - exact).max() < 2.5e-2 * np.abs(exact).max()
+    assert u.imbalance < 1e-6

@@ -25,6 +25,7 @@ class SurfaceGeometry:
     centres: np.ndarray  # (n_bodies, 3) scaled reference points
     collocation: np.ndarray  # (E, 3) element centres (node 8), the collocation points
     collocation_normals: np.ndarray  # (E, 3) unit outward normals there
+    parent_element: np.ndarray  # (E,) the element of its body's own mesh each element refines
     element_radius: np.ndarray  # (E,) largest node distance from the centre node
     areas: np.ndarray  # (E,) element areas with the operator's quadrature
     qp_positions: np.ndarray  # (E, Q, 3)
@@ -37,7 +38,7 @@ class SurfaceGeometry:
                     contact_refinement: float = 0.0, refine_fixed_at_wall: bool = True) -> "SurfaceGeometry":
         nodes = [b.world_nodes()[b.mesh.elements] / length_scale for b in bodies]
         exempt = None if refine_fixed_at_wall else [b.fixed for b in bodies]
-        nodes, unresolved = refine_near_contact(nodes, wall, contact_refinement, wall_exempt=exempt)
+        nodes, unresolved, parents = refine_near_contact(nodes, wall, contact_refinement, wall_exempt=exempt)
         counts = [len(n) for n in nodes]
         element_nodes = np.concatenate(nodes)
         stops = np.cumsum(counts)
@@ -52,6 +53,7 @@ class SurfaceGeometry:
             centres=np.array([b.position for b in bodies]) / length_scale,
             collocation=centre,
             collocation_normals=quad9.centre_normals(element_nodes),
+            parent_element=np.concatenate(parents),
             element_radius=np.linalg.norm(element_nodes - centre[:, None], axis=-1).max(axis=1),
             areas=np.linalg.norm(area_vectors, axis=-1).sum(axis=1),
             qp_positions=positions,
@@ -84,6 +86,7 @@ class SurfaceGeometry:
             body_of_element=np.zeros(stop - start, dtype=self.body_of_element.dtype),
             body_ranges=np.array([[0, stop - start]]), centres=self.centres[p : p + 1],
             collocation=self.collocation[own], collocation_normals=self.collocation_normals[own],
+            parent_element=self.parent_element[own],
             element_radius=self.element_radius[own], areas=self.areas[own],
             qp_positions=self.qp_positions[own], qp_area_vectors=self.qp_area_vectors[own], order=self.order,
             unresolved_contacts={})

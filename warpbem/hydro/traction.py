@@ -63,6 +63,7 @@ class TractionSolution:
     normals: np.ndarray
     areas: np.ndarray
     body_of_element: np.ndarray
+    parent_element: np.ndarray  # (E,) the element of its body's own mesh each element refines
     force: np.ndarray
     torque: np.ndarray
     iterations: int
@@ -74,6 +75,18 @@ class TractionSolution:
     def of_body(self, p: int) -> np.ndarray:
         """(E_p, 3) traction on body p's elements, Pa."""
         return self.traction[self.body_of_element == p]
+
+    def on_mesh(self, p: int, total: bool = True) -> np.ndarray:
+        """(E_mesh, 3) Pa: the (total, else fluid) traction on body p's own mesh elements, the
+        area-weighted mean over the elements the contact refinement split each into (the
+        input of the elastic problem, which works on the unrefined reference mesh)."""
+        own = self.body_of_element == p
+        values = (self.total_traction if total else self.traction)[own]
+        parent = self.parent_element[own]
+        count = parent.max() + 1
+        area = np.bincount(parent, self.areas[own], minlength=count)
+        return np.stack([np.bincount(parent, self.areas[own] * values[:, i], minlength=count) for i in range(3)],
+                        axis=1) / area[:, None]
 
     def velocity(self, points) -> np.ndarray:
         """(m, 3) velocity (m/s) of eq. 2.18, u = u_inf - int G t dS / mu, at ``points`` (m, 3)
@@ -179,6 +192,7 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wal
         torque[p] = (areas[a:b, None] * np.cross(points[a:b] - bodies[p].position, traction[a:b])).sum(axis=0)
     weights = np.linalg.norm(geometry.qp_area_vectors, axis=-1)  # (E, Q), scaled
     loads = (result.solution.reshape(-1, 1, 3) * weights[..., None]).reshape(-1, 3)
-    return TractionSolution(traction, traction + extra, points, normals.copy(), areas, geometry.body_of_element.copy(), force, torque,
+    return TractionSolution(traction, traction + extra, points, normals.copy(), areas, geometry.body_of_element.copy(),
+                            geometry.parent_element.copy(), force, torque,
                             result.iterations, result.residual, shear_rate, viscosity,
                             (adjoint, geometry.qp_positions.reshape(-1, 3), loads, length, scale))

@@ -69,13 +69,14 @@ def _gaps(meshes, p, wall, ratio):
 
 def refine_near_contact(element_nodes: list[np.ndarray], wall: bool, ratio: float,
                         max_levels: int = 4, warn_ratio: float = 3.0,
-                        wall_exempt=None) -> tuple[list[np.ndarray], dict]:
+                        wall_exempt=None) -> tuple[list[np.ndarray], dict, list[np.ndarray]]:
     """Refine every body's elements (list of (E_p, 9, 3) arrays, one per body); ``ratio`` 0
     refines nothing. ``wall_exempt`` (one flag per body): bodies not refined for, nor warned
     about, their gap to the wall (adherent cells, whose fixed gap to the wall changes the free
     cells' motion little; see scenes/recruitment_dome.toml).
 
-    Returns the refined meshes and the contacts they leave unresolved: {(p, q): smallest gap}
+    Returns the refined meshes, the contacts they leave unresolved and, per body, the element
+    of the unrefined mesh each refined element came from. The unresolved contacts are {(p, q): smallest gap}
     for body p near body q (q = WALL for the wall) where an element of p is still wider (in
     radius) than its gap over ``warn_ratio``. The stability map (README) shows why: with the
     default k = 4 sphere the refinement bottoms out at gaps near 0.05 radius, where squeeze-flow
@@ -83,6 +84,7 @@ def refine_near_contact(element_nodes: list[np.ndarray], wall: bool, ratio: floa
     below about 0.005 radius the results are meaningless or GMRES stalls.
     """
     meshes = [e.copy() for e in element_nodes]
+    parents = [np.arange(len(e)) for e in element_nodes]
     exempt = np.zeros(len(meshes), bool) if wall_exempt is None else np.asarray(wall_exempt, bool)
     for _ in range(max_levels if ratio > 0 else 0):
         changed = False
@@ -91,6 +93,7 @@ def refine_near_contact(element_nodes: list[np.ndarray], wall: bool, ratio: floa
             coarse = element_radius(elements) * ratio > gap
             if coarse.any():
                 meshes[p] = np.concatenate([elements[~coarse], split(elements[coarse])])
+                parents[p] = np.concatenate([parents[p][~coarse], np.repeat(parents[p][coarse], 4)])
                 changed = True
         if not changed:
             break
@@ -100,4 +103,4 @@ def refine_near_contact(element_nodes: list[np.ndarray], wall: bool, ratio: floa
         coarse = element_radius(elements) * warn_ratio > gap
         for q in np.unique(neighbour[coarse]):
             unresolved[(p, int(q))] = float(gap[coarse & (neighbour == q)].min())
-    return meshes, unresolved
+    return meshes, unresolved, parents
