@@ -9,10 +9,10 @@ from warpbem.hydro.mobility import CompletedDoubleLayer
 from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions
 
 
-def make_operator(bodies, wall, mode="dense", device="cpu", **quadrature):
+def make_operator(bodies, wall, mode="dense", device="cpu", kind="double_layer", **quadrature):
     options = QuadratureOptions(**{"order": 3, **quadrature})
     geometry = SurfaceGeometry.from_bodies(bodies, options.order, 1.0, wall)
-    return DoubleLayerOperator(geometry, wall, options, "float64", device, mode)
+    return DoubleLayerOperator(geometry, wall, options, "float64", device, mode, kind=kind)
 
 
 def two_spheres_near_wall():
@@ -35,9 +35,11 @@ def test_translations_are_annihilated_exactly(mode, device):
         assert np.abs(out[n0:]).max() < 2e-3
 
 
-def test_dense_and_matrix_free_agree(device, rng):
-    dense = make_operator(two_spheres_near_wall(), True, "dense", device)
-    free = make_operator(two_spheres_near_wall(), True, "matrix_free", device)
+@pytest.mark.parametrize("kind", ["double_layer", "adjoint_double_layer", "single_layer", "elastic_rotation"])
+def test_dense_and_matrix_free_agree(device, rng, kind):
+    """Every kernel kind, its self blocks (identity, the double layer's, Duffy) included."""
+    dense = make_operator(two_spheres_near_wall(), True, "dense", device, kind)
+    free = make_operator(two_spheres_near_wall(), True, "matrix_free", device, kind)
     q = rng.standard_normal(dense.size)
     np.testing.assert_allclose(free.matvec(q), dense.matvec(q), rtol=0, atol=1e-12 * np.abs(q).sum())
 
