@@ -19,6 +19,9 @@ layer's, I*_aa = I_aa = -1/2 - sum_{b != a in body(a)} I_ab (Phan-Thien & Fan 19
 
 The single layers (``kind = "single_layer"``, the Stokeslet; ``"inverse_distance"``, for the
 Kelvinlet) have no 1/2: their weakly singular self element is integrated by Duffy triangles.
+The two parts of the elastic double layer (``"elastic_rotation"``, ``"elastic_dyadic"``,
+``warpbem/elastic/interior.py``) take their self blocks from their own rigid-translation
+identity, as the double layer does.
 
 Applied either as an assembled dense matrix (Warp assembly, NumPy BLAS on CPU, a Warp kernel on
 CUDA) or matrix-free (Warp recomputes the element integrals in every product); ``mode="auto"``
@@ -66,6 +69,10 @@ IDENTITY_KINDS = ("double_layer", "elastic_rotation", "elastic_dyadic")
 
 
 class DoubleLayerOperator:
+    """A boundary-integral operator of one kernel ``kind`` (``kernels/assembly.py``: the double
+    layer, by default, its adjoint, the single layers, the elastic double layer's parts) over
+    the elements of ``geometry``, dense or matrix-free, with its self blocks (module docstring)."""
+
     def __init__(self, geometry: SurfaceGeometry, wall: bool, quadrature: QuadratureOptions,
                  dtype: str = "float64", device="cpu", mode: str = "auto",
                  dense_memory_limit: float | None = None, reuse: "DoubleLayerOperator | None" = None,
