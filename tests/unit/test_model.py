@@ -189,3 +189,29 @@ def test_an_interaction_s_own_state_is_stepped_framed_and_read_back(tmp_path):
     assert back.time == state.time and back.steps == state.steps == 3
     np.testing.assert_array_equal(back.positions, state.positions)
     np.testing.assert_array_equal(back.parts["odometer"]["distance"], state.parts["odometer"]["distance"])
+
+
+@pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
+def test_rigid_scenes_build_no_traction_or_elastic_operator(monkeypatch):
+    """Model no more than a scene needs (issue 10 item 9): a rigid cell settling in shear with
+    repulsion and an adherent neighbour assembles double layers only, never the adjoint
+    (traction), single-layer or elastic operators."""
+    from warpbem.hydro import operators
+
+    kinds = []
+    original = operators.DoubleLayerOperator.__init__
+
+    def recording(self, *args, **kwargs):
+        kinds.append(kwargs.get("kind", "double_layer"))
+        original(self, *args, **kwargs)
+
+    monkeypatch.setattr(operators.DoubleLayerOperator, "__init__", recording)
+    m = wb.mesh.sphere(A, 2)
+    gravity = Gravity([m, m], [False, True], [1050.0, 1000.0], 1000.0, STANDARD_GRAVITY)
+    model = Model([m, m], [False, True], Flow(100.0, 1.2e-3), interactions=[gravity, Repulsion()],
+                  policy=StepPolicy(0.01, 1e-6, 1e-9))
+    sim = Simulator(model)
+    state = model.initial_state([[0.0, 0.0, 1.5 * A], [3 * A, 0.0, 1.2 * A]])
+    for _ in range(2):
+        state, _ = sim.step(state)
+    assert kinds and set(kinds) == {"double_layer"}
