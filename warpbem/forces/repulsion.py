@@ -74,7 +74,8 @@ class Repulsion(Interaction):
     def force(self, eps):
         """F(eps) in N (eq. 3.1); eps > 0."""
         eps = np.asarray(eps, dtype=float)
-        return self.coefficient * self.inverse_length / np.expm1(self.inverse_length * eps)
+        with np.errstate(over="ignore"):  # far contacts: expm1 overflows to inf, the force to 0
+            return self.coefficient * self.inverse_length / np.expm1(self.inverse_length * eps)
 
     def slope(self, eps):
         """dF/d eps in N/m (negative)."""
