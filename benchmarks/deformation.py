@@ -45,8 +45,8 @@ def traction_row(k, device):
 
 def elastic_row(k, device):
     body = Body(wb.mesh.sphere(A, k))
-    assemble = best_time(lambda: InteriorElasticity(body, G, NU, device), repeats=1)
-    elastic = InteriorElasticity(body, G, NU, device)
+    assemble = best_time(lambda: InteriorElasticity(body.mesh, G, NU, device), repeats=1)
+    elastic = InteriorElasticity(body.mesh, G, NU, device)
     u = elastic.solve(lambda x, n: n @ STRESS)
     strain = STRESS / (2 * G) - NU / (2 * G * (1 + NU)) * np.trace(STRESS) * np.eye(3)
     exact = u.points @ strain.T

@@ -27,7 +27,7 @@ force and moment); any imbalance has no elastic solution and is reported.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg
@@ -38,6 +38,7 @@ from ..hydro.linalg import gmres
 from ..hydro.mobility import DEFAULT_TOLERANCE
 from ..hydro.operators import DoubleLayerOperator, QuadratureOptions
 from ..surfaces.body import Body
+from ..surfaces.mesh import Mesh
 
 
 class ElasticInputError(ValueError):
@@ -67,16 +68,18 @@ class Displacement:
 
 
 class InteriorElasticity:
-    """The elastic operators of one body's reference shape, assembled once (they depend on the
-    shape only: DESIGN.md §3, model no more than a scene needs) and reused for every traction."""
+    """The elastic operators of a cell's reference mesh (its body frame), assembled once (they
+    depend on the shape only: DESIGN.md §3, model no more than a scene needs) and reused for
+    every traction and every placement of the cell: ``solve`` takes the traction in the body
+    frame, ``solve_placed`` a world traction on a placed ``Body`` of this mesh."""
 
-    def __init__(self, body: Body, shear_modulus: float, poisson_ratio: float, device="cpu", *,
+    def __init__(self, mesh: Mesh, shear_modulus: float, poisson_ratio: float, device="cpu", *,
                  quadrature_order: int = 2, dtype: str = "float64", tolerance: float | None = None):
         check_material(shear_modulus, poisson_ratio)
         self.shear_modulus, self.poisson_ratio = float(shear_modulus), float(poisson_ratio)
-        self.body = body
-        self.length = float(body.mesh.equivalent_radius())
-        self.geometry = SurfaceGeometry.from_bodies([body], quadrature_order, self.length, False, 0.0)
+        self.mesh = mesh
+        self.length = float(mesh.equivalent_radius())
+        self.geometry = SurfaceGeometry.from_bodies([Body(mesh)], quadrature_order, self.length, False, 0.0)
         self.tolerance = DEFAULT_TOLERANCE[dtype] if tolerance is None else tolerance
         quadrature = QuadratureOptions(order=quadrature_order)
 
@@ -95,9 +98,21 @@ class InteriorElasticity:
         factor = np.linalg.cholesky(raw.T @ (self.weights[:, None] * raw))
         self.modes = scipy.linalg.solve_triangular(factor, raw.T, lower=True).T
 
+    def solve_placed(self, body: Body, traction) -> Displacement:
+        """Displacement (world frame, at the placed collocation points) of ``body`` (this mesh,
+        placed anywhere) under the world traction (E, 3) Pa on its elements: solved in the
+        body frame, t_body = R^T t, and turned back, u = R u_body."""
+        if body.mesh is not self.mesh:
+            raise ElasticInputError("the body must carry the mesh these operators were assembled for")
+        rotation = body.rotation()
+        local = self.solve(np.asarray(traction, dtype=float) @ rotation)
+        return replace(local, displacement=local.displacement @ rotation.T,
+                       points=local.points @ rotation.T + body.position)
+
     def solve(self, traction) -> Displacement:
-        """Displacement for the traction (Pa): an (E, 3) array over the body's elements, or a
-        function of their collocation points and unit normals ((E, 3) each, m)."""
+        """Displacement (body frame) for the body-frame traction (Pa): an (E, 3) array over the
+        mesh's elements, or a function of their collocation points and unit normals ((E, 3)
+        each, m, body frame)."""
         g = self.geometry
         if callable(traction):
             traction = traction(g.collocation * self.length, g.collocation_normals)
