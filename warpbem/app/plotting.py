@@ -7,7 +7,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..surfaces.body import Body
 from .io import RunFileError, open_result
 
 
@@ -91,11 +90,11 @@ def run_figure(h5_path):
     drawn to scale (their outlines at a few times, fading in from the first to the last; fixed
     cells once) over the reference points' paths, so a reader sees where the free cell passed
     the adherent ones and how close it came."""
-    from .xdmf import read_frames
+    from .xdmf import read_frames, world_nodes
 
     plt = _pyplot()
     h5_path = Path(h5_path)
-    meshes, t, pos, orientations = read_frames(h5_path)
+    meshes, t, pos, orientations, displacement = read_frames(h5_path)
     with open_result(h5_path) as f:
         names = json.loads(f.attrs.get("body_names", "[]")) or [f"body {i}" for i in range(pos.shape[1])]
         gap = f["closest_gap"][: len(t)] if "closest_gap" in f else None
@@ -116,7 +115,8 @@ def run_figure(h5_path):
         label = (f"{name}, outlines at t = " + ", ".join(f"{t[j]:.3g}" for j in frames) + " s") if moved[i] \
             else f"{name} (fixed)"
         for k, frame in enumerate(frames):
-            nodes = Body(meshes[i], position=pos[frame, i], orientation=orientations[frame, i]).world_nodes() * um
+            shape = None if displacement is None else displacement[frame, i : i + 1]
+            nodes = world_nodes(meshes[i : i + 1], pos[frame, i : i + 1], orientations[frame, i : i + 1], shape) * um
             alpha = 0.25 + 0.75 * (k + 1) / len(frames)
             for ax, axis in ((side, 2), (top, 1)):
                 line = outline(nodes[:, [0, axis]])

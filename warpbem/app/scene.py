@@ -35,7 +35,9 @@ viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
                                 fixed = false, density = 1000.0, force = [0, 0, 0] (N),
                                 torque = [0, 0, 0] (N m) on free bodies, adhesive = true (free
                                 bodies with adhesion on), shear_modulus (Pa; none: rigid, no
-                                Hertz patch), poisson_ratio = 0.33, ligands = false (fixed
+                                Hertz patch), poisson_ratio = 0.33, deformable = false
+                                (free bodies: quasi-static linear elasticity with
+                                shear_modulus, warpbem/elastic/deformable.py), ligands = false (fixed
                                 bodies: free cells can bind to them), and a mesh:
     [bodies.mesh]               shape = "sphere" (radius, subdivisions) | "spheroid" (radius,
                                 aspect_ratio, subdivisions) | "file" (path, relative to the scene)
@@ -56,6 +58,7 @@ from typing import NamedTuple
 
 from ..dynamics.model import Flow, Model, SolverOptions, StepPolicy
 from ..dynamics.state import State
+from ..elastic.deformable import Deformation
 from ..forces.adhesion import Adhesion
 from ..forces.external import STANDARD_GRAVITY, ExternalLoads, Gravity
 from ..forces.repulsion import Repulsion
@@ -125,6 +128,7 @@ class BodySpec(NamedTuple):
     shear_modulus: float | None
     poisson_ratio: float
     ligands: bool
+    deformable: bool
 
 
 @dataclass(frozen=True)
@@ -205,7 +209,8 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
     for i, spec in enumerate(table["bodies"]):
         where = f"bodies.{i}"
         _table(where, spec, {"name", "mesh", "position", "orientation", "fixed", "density", "force", "torque",
-                             "adhesive", "shear_modulus", "poisson_ratio", "ligands"}, ("mesh", "position"))
+                             "adhesive", "shear_modulus", "poisson_ratio", "ligands", "deformable"},
+               ("mesh", "position"))
         bodies.append(BodySpec(str(spec.get("name", f"body{i}")), _mesh(f"{where}.mesh", spec["mesh"], folder),
                                _vector(f"{where}.position", spec["position"], 3),
                                _vector(f"{where}.orientation", spec.get("orientation", [1.0, 0, 0, 0]), 4),
@@ -217,7 +222,11 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
                                None if "shear_modulus" not in spec else
                                _number(f"{where}.shear_modulus", spec["shear_modulus"], 0, 1e12, low_open=True),
                                _poisson(f"{where}.poisson_ratio", spec.get("poisson_ratio", 0.33)),
-                               _bool(f"{where}.ligands", spec.get("ligands", False))))
+                               _bool(f"{where}.ligands", spec.get("ligands", False)),
+                               _bool(f"{where}.deformable", spec.get("deformable", False))))
+        if bodies[-1].deformable and (bodies[-1].fixed or bodies[-1].shear_modulus is None):
+            raise SceneError(f"{where}.deformable: a deformable body must be free and give its shear_modulus (Pa;"
+                             " fixed cells are not deformed yet)")
         if bodies[-1].ligands and not bodies[-1].fixed:
             raise SceneError(f"{where}.ligands: ligands are modelled on fixed (adherent) cells only")
         if bodies[-1].fixed and (any(bodies[-1].force) or any(bodies[-1].torque)):
@@ -249,17 +258,24 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
     if _bool("physics.repulsion", physics.get("repulsion", False)):
         interactions.append(repulsion_model)
     adhesive = _bool("physics.adhesion", physics.get("adhesion", False))
+    if adhesive and any(b.deformable for b in bodies):
+        raise SceneError("bodies.N.deformable: deformable cells are not coupled to adhesion yet; set"
+                         " physics.adhesion = false or deformable = false")
     if adhesive:
         interactions.append(_adhesion(adhesion, bodies, repulsion_model, dt_min,
                                       _bool("flow.wall", flow.get("wall", True))))
+    flow_ = Flow(_number("flow.shear_rate", flow["shear_rate"], -1e6, 1e6),
+                 _number("flow.viscosity", flow.get("viscosity", 1.2e-3), 0, 1e3, low_open=True),
+                 _bool("flow.wall", flow.get("wall", True)))
+    if any(b.deformable for b in bodies):
+        interactions.append(Deformation(meshes_, [b.deformable for b in bodies],
+                                        [b.shear_modulus for b in bodies], [b.poisson_ratio for b in bodies], flow_))
     tolerance = solver.get("tolerance")
     reuse = _number("solver.reuse_tolerance", solver.get("reuse_tolerance", ADHESION_REUSE_TOLERANCE if adhesive
                                                           else 0.0), 0, 1e-6)
     model = Model(
         meshes=meshes_, fixed=fixed, names=[b.name for b in bodies], interactions=interactions,
-        flow=Flow(_number("flow.shear_rate", flow["shear_rate"], -1e6, 1e6),
-                  _number("flow.viscosity", flow.get("viscosity", 1.2e-3), 0, 1e3, low_open=True),
-                  _bool("flow.wall", flow.get("wall", True))),
+        flow=flow_,
         solver=SolverOptions(
             quadrature_order=_number("solver.quadrature_order", solver.get("quadrature_order", 2), 1, 10, integer=True),
             contact_refinement=_number("solver.contact_refinement", solver.get("contact_refinement", 3.0), 0, 20),

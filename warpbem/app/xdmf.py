@@ -25,9 +25,13 @@ from .io import RunFileError, complete_rows, open_result
 from .scene import SceneError, parse
 
 
+DISPLACEMENT = "deformation_node_displacement"  # the frame column of deformable cells' shapes
+
+
 def read_frames(run_path: Path):
-    """(meshes, time (F,), positions (F, n, 3), orientations (F, n, 4)) of the frames complete in
-    every column (the writer fills the columns one by one), read without a lock."""
+    """(meshes, time (F,), positions (F, n, 3), orientations (F, n, 4), node displacements (F, n,
+    N, 3) in the body frames or None for rigid runs) of the frames complete in every column (the
+    writer fills the columns one by one), read without a lock."""
     with open_result(run_path, needs=("time", "position", "orientation", "scene", "scene_folder")) as f:
         try:
             scene = parse(json.loads(f.attrs["scene"]), Path(f.attrs["scene_folder"]))
@@ -37,16 +41,21 @@ def read_frames(run_path: Path):
         if frames == 0:
             raise RunFileError(f"{run_path}: the run has no frame yet")
         time, positions, orientations = (f[k][:frames] for k in ("time", "position", "orientation"))
+        displacement = f[DISPLACEMENT][:frames] if DISPLACEMENT in f else None
     meshes = [b.mesh for b in scene.bodies]
     if positions.shape[1] != len(meshes):
         raise RunFileError(f"{run_path}: {positions.shape[1]} bodies in the frames but {len(meshes)} in its scene")
-    return meshes, time, positions, orientations
+    return meshes, time, positions, orientations, displacement
 
 
-def world_nodes(meshes, positions, orientations) -> np.ndarray:
-    """All bodies' nodes in the world frame, concatenated."""
-    return np.concatenate([Body(m, position=p, orientation=q).world_nodes()
-                           for m, p, q in zip(meshes, positions, orientations)])
+def world_nodes(meshes, positions, orientations, displacement=None) -> np.ndarray:
+    """All bodies' nodes in the world frame, concatenated; ``displacement`` (n, N, 3): the
+    deformable cells' node displacements in their body frames (warpbem/elastic/deformable.py)."""
+    out = []
+    for i, (m, p, q) in enumerate(zip(meshes, positions, orientations)):
+        nodes = m.nodes if displacement is None else m.nodes + displacement[i, :len(m.nodes)]
+        out.append(nodes @ Body(m, orientation=q).rotation().T + p)
+    return np.concatenate(out)
 
 
 def _data_item(parent, dims, number_type, precision, reference):
@@ -58,7 +67,7 @@ def _data_item(parent, dims, number_type, precision, reference):
 def write(run_path) -> Path:
     """Write ``RUN.xdmf`` and ``RUN.xdmf.h5`` beside the run file ``RUN.h5``; returns the .xdmf."""
     run_path = Path(run_path)
-    meshes, time, positions, orientations = read_frames(run_path)
+    meshes, time, positions, orientations, displacement = read_frames(run_path)
     offsets = np.cumsum([0] + [len(m.nodes) for m in meshes])
     connectivity = np.concatenate([m.elements + o for m, o in zip(meshes, offsets)])
     body = np.concatenate([np.full(m.n_elements, i, dtype=np.int32) for i, m in enumerate(meshes)])
@@ -73,8 +82,8 @@ def write(run_path) -> Path:
         group.create_dataset("body", data=body)
         nodes = group.create_group("nodes")
         nodes.attrs["unit"] = "m"
-        for name, p, q in zip(names, positions, orientations):
-            nodes.create_dataset(name, data=world_nodes(meshes, p, q))
+        for k, (name, p, q) in enumerate(zip(names, positions, orientations)):
+            nodes.create_dataset(name, data=world_nodes(meshes, p, q, None if displacement is None else displacement[k]))
 
     root = ET.Element("Xdmf", Version="3.0")
     domain = ET.SubElement(root, "Domain")

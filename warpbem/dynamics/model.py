@@ -159,8 +159,12 @@ class Model:
     def bodies(self, state: State) -> list[Body]:
         if len(state.positions) != self.n_bodies:
             raise ValueError(f"the state has {len(state.positions)} bodies, the model {self.n_bodies}")
+        meshes = list(self.meshes)
+        for x in self.interactions:  # deformable cells: the shapes of this state
+            if x.name in state.parts:
+                meshes = x.body_meshes(state.parts[x.name], meshes)
         return [Body(m, position=p, orientation=q, fixed=f)
-                for m, p, q, f in zip(self.meshes, state.positions, state.orientations, self.fixed)]
+                for m, p, q, f in zip(meshes, state.positions, state.orientations, self.fixed)]
 
     def initial_state(self, positions, orientations=None, time: float = 0.0) -> State:
         """The state at ``time`` with the bodies placed; each interaction's own part at its start."""

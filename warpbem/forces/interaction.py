@@ -26,7 +26,9 @@ its value after an accepted step in ``advance_state``; the step keeps it in
 ``State.parts[interaction.name]``, passes it back to the interaction's other methods as
 ``part``, frames write it as columns ``<name>_<column>`` and a resumed run reads it back.
 Columns derived from it (``derived_columns``/``derived_values``) are written under their own
-names. ``longest_step`` bounds the step from a state (the bond kinetics: k dt << 1).
+names. ``longest_step`` bounds the step from a state (the bond kinetics: k dt << 1). An
+interaction that shapes bodies (deformable cells) gives their meshes from its part in
+``body_meshes`` and the part of the step's end in ``advance_shape``, from the start state.
 """
 
 from __future__ import annotations
@@ -123,6 +125,16 @@ class Interaction:
 
     def advance_state(self, part: dict, start_bodies, end_bodies, end_contacts, dt: float, end_time: float) -> dict:
         return part
+
+    def advance_shape(self, part: dict, start_bodies, start_loads: Loads, end_orientations) -> dict:
+        """The part of a step's end where it sets the bodies' shapes (deformable cells): from
+        the start state's bodies and total external loads (those of its frame) and the end's
+        orientations; called before the end's bodies are built, so they take the new shapes."""
+        return part
+
+    def body_meshes(self, part: dict, meshes: list) -> list:
+        """The meshes of the bodies at a state with this part (body frame); default unchanged."""
+        return meshes
 
     def prepare(self, device) -> None:
         """Put device data (kernels, static arrays) on ``device`` before the first step."""
