@@ -161,7 +161,7 @@ class Model:
             raise ValueError(f"the state has {len(state.positions)} bodies, the model {self.n_bodies}")
         meshes = list(self.meshes)
         for x in self.interactions:  # deformable cells: the shapes of this state
-            if x.name in state.parts:
+            if x.shapes_bodies and x.name in state.parts:
                 meshes = x.body_meshes(state.parts[x.name], meshes)
         return [Body(m, position=p, orientation=q, fixed=f)
                 for m, p, q, f in zip(meshes, state.positions, state.orientations, self.fixed)]

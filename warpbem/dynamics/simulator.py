@@ -205,11 +205,13 @@ class Simulator:
         moved, _ = integrate.step(state, motion, dt, self.model.scheme)
         moved = replace(moved, time=moved.time if landing is None else landing, steps=state.steps + 1)
         owners = [x for x in self.model.interactions if x.name in state.parts]
-        if owners:  # shapes first (the end's bodies are built with them), from the start state
+        shapers = [x for x in owners if x.shapes_bodies]
+        if shapers:  # shapes first (the end's bodies are built with them), from the start state
             frame = start.frame(dt)
             loads = Loads(frame.force, frame.torque)
-            moved = replace(moved, parts={x.name: x.advance_shape(state.parts[x.name], start.contacts.bodies, loads,
-                                                                  moved.orientations) for x in owners})
+            moved = replace(moved, parts={**state.parts, **{
+                x.name: x.advance_shape(state.parts[x.name], start.contacts.bodies, loads, moved.orientations)
+                for x in shapers}})
         geometry = self.geometry(moved)
         if owners:  # interactions that own state advance it over the accepted motion
             parts = {x.name: x.advance_state(moved.parts[x.name], start.contacts.bodies, *geometry, dt, moved.time)

@@ -42,6 +42,7 @@ class Deformation(Interaction):
     per body ``shear_modulus`` (Pa) and ``poisson_ratio``; ``flow`` the model's ``Flow``."""
 
     name = "deformation"
+    shapes_bodies = True
 
     def __init__(self, meshes, deformable, shear_modulus, poisson_ratio, flow, *, quadrature_order: int = 2,
                  contact_refinement: float = 3.0):

@@ -92,6 +92,7 @@ class Interaction:
     columns and its part of the state."""
 
     name = "interaction"
+    shapes_bodies = False  # True: body_meshes / advance_shape apply (deformable cells)
     implicit = False  # True: implicit_coordinates / implicit_magnitudes / magnitudes_at apply
 
     def explicit_loads(self, bodies, contacts) -> Loads | None:
