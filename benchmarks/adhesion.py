@@ -29,7 +29,7 @@ import warnings
 import numpy as np
 
 import warpbem as wb
-from common import output, print_table, pyplot, write_csv
+from common import output, print_table, pyplot, save_chart, write_csv
 from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy
 from warpbem.dynamics.simulator import Simulator
 from warpbem.forces.adhesion import Adhesion
@@ -255,11 +255,7 @@ def chart(reuse_rows, step_rows, path):
         b.annotate(f"k dt = {r['kinetics_fraction']:g}", (xi, r["rolled_um"]), fontsize=8)
     b.set(xlabel="fewer steps than with k dt = %g" % step_rows[-1]["kinetics_fraction"],
           ylabel="distance rolled before arrest [um] (mean, 2 SE)", title="step: kinetics fraction")
-    for ax in (a, b):
-        ax.grid(alpha=0.3, which="both")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    return path
+    return save_chart(fig, path, (a, b))
 
 
 def interaction_chart(rows, path):
@@ -276,11 +272,7 @@ def interaction_chart(rows, path):
     ax.set(xlabel="height lattice of the several-body snapshots, reuse_interaction [nm]",
            ylabel="largest change / largest entry, at 0.4 lattice off",
            title="two cells 12 um apart rolling in line: snapshot error")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=6)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    return path
+    return save_chart(fig, path, (ax,), legend_size=6)
 
 
 def main():

@@ -17,7 +17,7 @@ import warnings
 import numpy as np
 
 import warpbem as wb
-from common import best_time, output, print_table, pyplot, write_csv
+from common import best_time, output, print_table, pyplot, save_chart, write_csv
 from warpbem.elastic.interior import InteriorElasticity
 from warpbem.surfaces.body import Body
 
@@ -66,11 +66,7 @@ def chart(traction_rows, elastic_rows, path):
             ax.annotate(f"k={r['k']}", (r[t], r[err]), fontsize=7)
     ax.set(xlabel="time per solve [s]", ylabel="largest error / largest exact value",
            title="deformation operators: error against cost")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    return path
+    return save_chart(fig, path, (ax,), legend_size=8)
 
 
 def main():

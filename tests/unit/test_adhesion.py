@@ -11,6 +11,7 @@ from warpbem.app import scene
 from warpbem.forces.adhesion import BOLTZMANN, Adhesion, contact_traction, hertz_contact_radius
 from warpbem.surfaces.body import Body
 from warpbem.surfaces.gaps import Contacts, GapFinder
+from tests.scene_points import sweep_scenes
 
 
 def write(tmp_path, text):
@@ -248,14 +249,8 @@ THESIS_CH4 = [
 
 @pytest.mark.parametrize("name, sigma, cells, cap, compression", THESIS_CH4)
 def test_thesis_ch4_scenes_use_table_4_1(name, sigma, cells, cap, compression):
-    from pathlib import Path
-
-    from warpbem.app.sweep import grid
-
-    path = Path(__file__).resolve().parents[2] / "scenes" / f"{name}.toml"
     seen, options = set(), set()
-    for _, overrides in grid([], scene.load(path).sweep):
-        s = scene.load(path, overrides)
+    for s in sweep_scenes(name):
         bonds = s.model.interaction("bond")
         assert (bonds.spring_constant, bonds.equilibrium_length, bonds.off_rate, bonds.reactive_compliance,
                 bonds.on_rate, bonds.receptor_density, bonds.roughness) == (sigma, 30e-9, 2.4, 0.39e-10, 365.0,

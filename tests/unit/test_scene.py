@@ -8,6 +8,7 @@ import pytest
 
 from warpbem import mesh
 from warpbem.app import run, scene
+from tests.scene_points import sweep_scenes
 
 BASE = {
     "flow": {"shear_rate": 0.0, "viscosity": 1e-3},
@@ -205,14 +206,8 @@ THESIS_CASES = [
 
 @pytest.mark.parametrize("name, x, z, glances, heights", THESIS_CASES)
 def test_thesis_scenes_place_the_cells_as_the_thesis_does(name, x, z, glances, heights):
-    from pathlib import Path
-
-    from warpbem.app.sweep import grid
-
-    path = Path(__file__).resolve().parents[2] / "scenes" / f"{name}.toml"
     seen_glances, seen_heights = set(), set()
-    for _, overrides in grid([], scene.load(path).sweep):
-        s = scene.load(path, overrides)
+    for s in sweep_scenes(name):
         free = [b for b in s.bodies if not b.fixed]
         assert len(free) == 1 and free[0].position[0] == pytest.approx(x * 1e-6)
         assert free[0].position[2] == pytest.approx(z * 1e-6)

@@ -93,6 +93,17 @@ class MobilitySolution:
     reused_bodies: np.ndarray  # per body: operator blocks kept from the previous solve
 
 
+def checked_bodies(bodies) -> list:
+    """``bodies`` as a list, at least one, every item a ``Body``."""
+    bodies = list(bodies)
+    if not bodies:
+        raise ValueError("bodies must contain at least one Body")
+    for i, b in enumerate(bodies):
+        if not isinstance(b, Body):
+            raise TypeError(f"bodies[{i}] must be a warpbem.Body, got {type(b).__name__}")
+    return bodies
+
+
 def _load_array(name, value, bodies, fixed_allowed: bool = False):
     """(n, 3) loads, one row per body, checked; a fixed body's row must be zero unless
     ``fixed_allowed`` (its load is then an input, e.g. the traction problem's)."""
@@ -327,12 +338,7 @@ class MobilitySolver:
         at rest), e.g. the mobility of a contact for an implicit contact force; such a solve
         reuses the whole system of a preceding solve of the same bodies and leaves the warm
         start of the next ordinary solve alone."""
-        bodies = list(bodies)
-        if not bodies:
-            raise ValueError("bodies must contain at least one Body")
-        for i, b in enumerate(bodies):
-            if not isinstance(b, Body):
-                raise TypeError(f"bodies[{i}] must be a warpbem.Body, got {type(b).__name__}")
+        bodies = checked_bodies(bodies)
         forces = _load_array("forces", forces, bodies)
         torques = _load_array("torques", torques, bodies)
         if check_placement_first:

@@ -42,11 +42,10 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse.linalg as spla
 
-from ..surfaces.body import Body
 from ..surfaces.placement import check_placement
 from .geometry import SurfaceGeometry
 from .linalg import gmres
-from .mobility import DEFAULT_TOLERANCE, _finite, _load_array
+from .mobility import DEFAULT_TOLERANCE, _finite, _load_array, checked_bodies
 from .operators import DoubleLayerOperator, QuadratureOptions
 
 
@@ -125,12 +124,7 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wal
     docstring): an (E, 3) array over the elements after contact refinement, or a function of
     the collocation points and their unit normals ((E, 3) each, m) that returns one. Options as for
     ``solve_mobility``."""
-    bodies = list(bodies)
-    if not bodies:
-        raise ValueError("bodies must contain at least one Body")
-    for i, b in enumerate(bodies):
-        if not isinstance(b, Body):
-            raise TypeError(f"bodies[{i}] must be a warpbem.Body, got {type(b).__name__}")
+    bodies = checked_bodies(bodies)
     shear_rate = _finite("shear_rate", shear_rate)
     viscosity = _finite("viscosity", viscosity, positive=True)
     if dtype not in DEFAULT_TOLERANCE:
