@@ -19,6 +19,10 @@ viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
                                 kinetics_fraction = 0.1 (the step keeps k dt below it),
                                 cell_ligand_layer (ligands on adherent cells; default:
                                 repulsion.cell_roughness)
+    [deformation]               (deformable bodies; warpbem/elastic/deformable.py) relaxation =
+                                true (the fluid's resistance, tau = 3 mu / 2G; false:
+                                quasi-static), update_interval = 1 (steps between traction and
+                                elastic solves)
     [time]                      end = 0.01, dt_max = 1e-4, dt_min = 1e-5, contact_gap = 5e-7,
                                 scheme = "heun", and frames by steps, frame_every = 1, or by
                                 time, frame_interval = 1e-3 (s; the steps land on frame times)
@@ -36,8 +40,8 @@ viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
                                 torque = [0, 0, 0] (N m) on free bodies, adhesive = true (free
                                 bodies with adhesion on), shear_modulus (Pa; none: rigid, no
                                 Hertz patch), poisson_ratio = 0.33, deformable = false
-                                (free bodies: quasi-static linear elasticity with
-                                shear_modulus, warpbem/elastic/deformable.py), ligands = false (fixed
+                                (free bodies: linear elasticity with shear_modulus, see
+                                [deformation]), ligands = false (fixed
                                 bodies: free cells can bind to them), and a mesh:
     [bodies.mesh]               shape = "sphere" (radius, subdivisions) | "spheroid" (radius,
                                 aspect_ratio, subdivisions) | "file" (path, relative to the scene)
@@ -190,12 +194,18 @@ def _mesh(where, spec, folder: Path):
 
 def parse(table: dict, folder: Path = Path(".")) -> Scene:
     """Validate a scene table (as read from TOML) and build the Scene."""
-    _table("scene", table, {"flow", "physics", "repulsion", "adhesion", "time", "solver", "bodies", "sweep"},
+    _table("scene", table, {"flow", "physics", "repulsion", "adhesion", "deformation", "time", "solver",
+                           "bodies", "sweep"},
            ("flow", "time", "bodies"))
     sweep = _sweep_axes(table.get("sweep", {}))
     flow = _table("flow", table["flow"], {"shear_rate", "viscosity", "wall"}, ("shear_rate",))
     physics = _table("physics", table.get("physics", {}), {"gravity", "fluid_density", "repulsion", "adhesion"})
     adhesion = _table("adhesion", table.get("adhesion", {}), ADHESION_KEYS)
+    deformation = _table("deformation", table.get("deformation", {}), {"relaxation", "update_interval"})
+    # validated even when no body deforms, so typos surface early
+    relaxation = _bool("deformation.relaxation", deformation.get("relaxation", True))
+    update_interval = _number("deformation.update_interval", deformation.get("update_interval", 1), 1, 1e6,
+                              integer=True)
     repulsion = _table("repulsion", table.get("repulsion", {}),
                        {"coefficient", "inverse_length", "cell_roughness", "wall_roughness"})
     time = _table("time", table["time"], {"end", "dt_max", "dt_min", "contact_gap", "scheme", "frame_every",
@@ -268,8 +278,10 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
                  _number("flow.viscosity", flow.get("viscosity", 1.2e-3), 0, 1e3, low_open=True),
                  _bool("flow.wall", flow.get("wall", True)))
     if any(b.deformable for b in bodies):
-        interactions.append(Deformation(meshes_, [b.deformable for b in bodies],
-                                        [b.shear_modulus for b in bodies], [b.poisson_ratio for b in bodies], flow_))
+        interactions.append(Deformation(
+            meshes_, [b.deformable for b in bodies], [b.shear_modulus for b in bodies],
+            [b.poisson_ratio for b in bodies], flow_,
+            relaxation=relaxation, update_interval=update_interval))
     tolerance = solver.get("tolerance")
     reuse = _number("solver.reuse_tolerance", solver.get("reuse_tolerance", ADHESION_REUSE_TOLERANCE if adhesive
                                                           else 0.0), 0, 1e-6)

@@ -210,7 +210,7 @@ class Simulator:
             frame = start.frame(dt)
             loads = Loads(frame.force, frame.torque)
             moved = replace(moved, parts={**state.parts, **{
-                x.name: x.advance_shape(state.parts[x.name], start.contacts.bodies, loads, moved.orientations)
+                x.name: x.advance_shape(state.parts[x.name], start.contacts.bodies, loads, moved.orientations, dt)
                 for x in shapers}})
         geometry = self.geometry(moved)
         if owners:  # interactions that own state advance it over the accepted motion

@@ -1,28 +1,50 @@
-"""Deformable cells in time: the quasi-static linear elastic model (thesis ch. 2.2 C, ch. 2.3).
+"""Deformable cells in time: linear elasticity relaxing through the fluid (thesis ch. 2.2 C,
+ch. 2.3; Roscoe 1967 J. Fluid Mech. 28:273).
 
-Model. A deformable cell's surface at a state is its rigid placement (position x_c,
+Kinematics. A deformable cell's surface at a state is its rigid placement (position x_c,
 orientation R) of its reference mesh displaced in its body frame:
 
     x = x_c + R (X + u(X)),
 
-u the node displacement of the state (``nodal_displacement`` of the element values). The flow
-sees the deformed surface as a rigid body at that instant (its mobility is solved on it). At
-each accepted step the displacement of the step's end follows from the start state: the
-traction the fluid exerts on every body there (``solve_traction``, closed by each body's total
-external load, the start frame's force and torque), turned into the body frame and solved by
-the interior elastic problem on the reference mesh (``interior.py``), u_(n+1) = E[R_n^T t_n].
+u the node displacement of the state (``nodal_displacement`` of the element values). The body
+frame is the material's: R turns with the cell's rigid rotation, so the reference points X
+(material points) circulate around a steady shape (tank-treading, thesis fig. 2.12) while u
+keeps the shape. The flow sees the deformed surface as a rigid body at the instant (its
+mobility is solved on it).
 
-Assumptions and limits. Linear elasticity (small strains: D << 1, i.e. Ca = mu gdot / G << 1).
-Quasi-static: the cell is at elastic equilibrium with the traction at every instant, which
-holds when the elastic relaxation is fast against the flow (viscous number mu gdot / G small;
-the cell's own internal viscosity is not modelled), and the displacement lags the traction by
-one step (first order in dt): the shape solved at the start is carried by the step's rigid
-rotation, so a cell spinning at Omega in shear shows its inclination Omega dt behind (45
-degrees - Omega dt; 42.1 degrees with 1 ms steps at 100 1/s, 44.7 with 0.1 ms). The material
-does not circulate: the shape is re-solved in the rotated frame each step, so a steady shape
-in shear (45 degrees, D = 5 Ca / 4 as Ca -> 0) is reached at once and tank-treading of the
-material points, which needs the cell's interior kinematics, is not represented. The traction
-includes the fluid's only (contact tractions are for the adhesion coupling, not wired here).
+Elastic target. At a step the traction the fluid exerts on every body at the start state
+(``solve_traction``, closed by each body's total external load, the start frame's force and
+torque), turned into the body frame, gives through the interior elastic problem on the
+reference mesh (``interior.py``) the displacement u* = E[R_n^T t_n] that would balance it.
+
+Relaxation (``relaxation = True``, the default). The cell does not reach u* at once: as its
+surface moves the fluid resists. For a sphere in a linear flow (Roscoe 1967; the Taylor
+1932 calculation for a drop) the fluid traction on a surface moving with the strain rate e is
+5 mu E.n - 3 mu e.n and the elastic one 2 G eps.n, so in the material frame
+
+    d eps / dt = (5 mu E - 2 G eps) / (3 mu) = (eps* - eps) / tau,    tau = 3 mu / (2 G),
+
+and the model takes every cell's displacement along the same law, exactly over a step for a
+target held over it:
+
+    u_(n+1) = u* + (u_n - u*) exp(-dt / tau).
+
+For a sphere in unbounded shear this gives Roscoe's linear steady state, D = 5 Ca / (2 sqrt(4
++ 9 Ca^2)) with its long axis at (1/2) atan(2 / (3 Ca)) = pi/4 - 3 Ca / 4 + O(Ca^3) from the
+flow (Ca = mu gdot / G). ``relaxation = False`` takes u_(n+1) = u* (quasi-static: D = 5 Ca /
+4 at pi/4, the limit tau -> 0, which the relaxing model reaches by itself for stiff cells:
+tau = 0.4 us for G = 4 kPa).
+
+``update_interval`` = m > 1 re-solves the target every m-th step only and relaxes towards the
+kept one (body frame) in between (model no more than the scene needs: a slow, stiff cell).
+
+Limits. Linear elasticity (small strains: D << 1). tau is the sphere's for its strain (l = 2)
+mode in unbounded fluid: other modes, other shapes and the wall change the fluid's resistance
+to deformation (a thin gap resists more); the cell's own internal viscosity is not modelled.
+The target lags the traction by one step (first order in dt): it is solved at the start and
+carried by the step's rotation, so a cell spinning at Omega shows its inclination Omega dt
+behind. The traction is the fluid's only (contact tractions are for the adhesion coupling, not
+wired here).
 """
 
 from __future__ import annotations
@@ -38,27 +60,36 @@ from .shape import nodal_displacement, shear_plane_deformation
 
 
 class Deformation(Interaction):
-    """Quasi-static linear elastic deformation of the ``deformable`` bodies (module docstring):
-    per body ``shear_modulus`` (Pa) and ``poisson_ratio``; ``flow`` the model's ``Flow``."""
+    """Linear elastic deformation of the ``deformable`` bodies (module docstring): per body
+    ``shear_modulus`` (Pa) and ``poisson_ratio``; ``flow`` the model's ``Flow``; ``relaxation``
+    the fluid's resistance to the deformation (False: quasi-static); the target re-solved every
+    ``update_interval`` steps."""
 
     name = "deformation"
     shapes_bodies = True
 
-    def __init__(self, meshes, deformable, shear_modulus, poisson_ratio, flow, *, quadrature_order: int = 2,
-                 contact_refinement: float = 3.0):
+    def __init__(self, meshes, deformable, shear_modulus, poisson_ratio, flow, *, relaxation: bool = True,
+                 update_interval: int = 1, quadrature_order: int = 2, contact_refinement: float = 3.0):
         self.meshes = list(meshes)
         self.deformable = np.asarray(deformable, dtype=bool)
         if len(self.deformable) != len(self.meshes) or not self.deformable.any():
             raise ValueError("deformable must flag each body, at least one of them")
         for i in np.flatnonzero(self.deformable):
             check_material(shear_modulus[i], poisson_ratio[i])
+        if int(update_interval) != update_interval or update_interval < 1:
+            raise ValueError(f"update_interval must be a whole number of steps >= 1, not {update_interval}")
         self.flow = flow
+        self.relaxation, self.update_interval = bool(relaxation), int(update_interval)
         self.contact_refinement = contact_refinement
         self.quadrature_order = quadrature_order
         self.shear_modulus, self.poisson_ratio = list(shear_modulus), list(poisson_ratio)
         self.max_nodes = max(len(m.nodes) for m in self.meshes)
         self.device = "cpu"
         self.elastic = {}
+
+    def relaxation_time(self, i: int) -> float:
+        """tau = 3 mu / (2 G) (s) of body i (module docstring); 0 for the quasi-static model."""
+        return 1.5 * self.flow.viscosity / self.shear_modulus[i] if self.relaxation else 0.0
 
     def prepare(self, device) -> None:
         self.device = device
@@ -70,10 +101,16 @@ class Deformation(Interaction):
     def state_columns(self):
         n = len(self.meshes)
         return {"node_displacement": ("m (body frame; rows past a mesh's nodes are zero)", (n, self.max_nodes, 3)),
+                "target_displacement": ("m (body frame: the elastic balance of the last traction solved)",
+                                        (n, self.max_nodes, 3)),
+                "steps_since_solve": ("1 (steps since the target was solved; per body, all alike)", (n,)),
                 "orientation": ("1 (quaternion w, x, y, z of the shape measured)", (n, 4))}
 
     def initial_state(self, bodies):
-        return {"node_displacement": np.zeros((len(self.meshes), self.max_nodes, 3)),
+        zeros = np.zeros((len(self.meshes), self.max_nodes, 3))
+        # the first step solves its target
+        return {"node_displacement": zeros, "target_displacement": zeros.copy(),
+                "steps_since_solve": np.full(len(self.meshes), float(self.update_interval)),
                 "orientation": np.array([b.orientation for b in bodies])}
 
     def body_meshes(self, part, meshes):
@@ -83,18 +120,31 @@ class Deformation(Interaction):
             out[i] = Mesh(nodes + part["node_displacement"][i, :len(nodes)], self.meshes[i].elements)
         return out
 
-    def advance_shape(self, part, start_bodies, start_loads, end_orientations):
+    def advance_shape(self, part, start_bodies, start_loads, end_orientations, dt):
         if not self.elastic:
             self.prepare(self.device)
+        target, age = part["target_displacement"], part["steps_since_solve"]
+        if age[0] >= self.update_interval:
+            target, age = self._target(start_bodies, start_loads), np.zeros_like(age)
+        displacement = np.zeros_like(part["node_displacement"])
+        for i in self.elastic:
+            tau = self.relaxation_time(i)
+            keep = np.exp(-dt / tau) if tau > 0 else 0.0
+            displacement[i] = target[i] + (part["node_displacement"][i] - target[i]) * keep
+        return {"node_displacement": displacement, "target_displacement": target, "steps_since_solve": age + 1.0,
+                "orientation": np.array(end_orientations, dtype=float)}
+
+    def _target(self, start_bodies, start_loads):
+        """u* of every deformable body: the elastic balance of the start state's traction."""
         traction = solve_traction(start_bodies, self.flow.shear_rate, self.flow.viscosity, self.flow.wall,
                                   start_loads.force, start_loads.torque, self.device,
                                   quadrature_order=self.quadrature_order, contact_refinement=self.contact_refinement)
-        displacement = np.zeros_like(part["node_displacement"])
+        target = np.zeros((len(self.meshes), self.max_nodes, 3))
         for i, elastic in self.elastic.items():
             # each element's traction, in the body frame of the state it was solved at
             local = elastic.solve(traction.on_mesh(i) @ start_bodies[i].rotation())
-            displacement[i, :len(self.meshes[i].nodes)] = nodal_displacement(self.meshes[i], local.displacement)
-        return {"node_displacement": displacement, "orientation": np.array(end_orientations, dtype=float)}
+            target[i, :len(self.meshes[i].nodes)] = nodal_displacement(self.meshes[i], local.displacement)
+        return target
 
     def derived_columns(self):
         n = len(self.meshes)

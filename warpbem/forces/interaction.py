@@ -127,10 +127,11 @@ class Interaction:
     def advance_state(self, part: dict, start_bodies, end_bodies, end_contacts, dt: float, end_time: float) -> dict:
         return part
 
-    def advance_shape(self, part: dict, start_bodies, start_loads: Loads, end_orientations) -> dict:
+    def advance_shape(self, part: dict, start_bodies, start_loads: Loads, end_orientations, dt: float) -> dict:
         """The part of a step's end where it sets the bodies' shapes (deformable cells): from
-        the start state's bodies and total external loads (those of its frame) and the end's
-        orientations; called before the end's bodies are built, so they take the new shapes."""
+        the start state's bodies and total external loads (those of its frame), the end's
+        orientations and the step dt (s); called before the end's bodies are built, so they take
+        the new shapes."""
         return part
 
     def body_meshes(self, part: dict, meshes: list) -> list:
