@@ -219,3 +219,28 @@ def test_thesis_scenes_place_the_cells_as_the_thesis_does(name, x, z, glances, h
         if name.startswith("fig5_1") and "two" in name:  # two adherent cells 30 um apart in the flow
             assert sorted(b.position[0] for b in fixed) == pytest.approx([0.0, 30e-6])
     assert seen_glances == set(glances) and seen_heights == heights
+
+
+# thesis ch. 2.3 B and appendix B: (scene, viscous numbers Vi = mu gdot / eta, aspect ratios, wall)
+SHAPE_DYNAMICS = [
+    ("fig2_09_11_tank_treading", {0.2, 0.1, round(0.1 / 23, 6)}, {1.0}, True),
+    ("fig2_13_14_tumbling", {0.1, 0.2}, {0.5, 0.75}, True),
+    ("tumbling_trembling", {0.1, 0.2}, {0.5, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9}, False),
+]
+
+
+@pytest.mark.parametrize("name, vis, kappas, wall", SHAPE_DYNAMICS)
+def test_shape_dynamics_scenes_set_the_thesis_cells(name, vis, kappas, wall):
+    """a = 5 um, nu = 0.33, mu = 1 mPa s, a free deformable cell relaxing through the fluid,
+    every Vi and aspect ratio of the thesis's figures (figs. 2.9-2.14, B-1, B-2)."""
+    seen_vi, seen_kappa = set(), set()
+    for s in sweep_scenes(name):
+        (cell,) = s.bodies
+        deformation = s.model.interaction("deformation")
+        assert cell.deformable and not cell.fixed and cell.poisson_ratio == 0.33 and deformation.relaxation
+        assert s.model.flow.viscosity == 1e-3 and s.model.flow.wall == wall
+        extent = cell.mesh.nodes.max(axis=0) - cell.mesh.nodes.min(axis=0)
+        assert extent[0] == pytest.approx(10e-6)
+        seen_kappa.add(round(extent[2] / extent[0], 6))
+        seen_vi.add(round(s.model.flow.viscosity * s.model.flow.shear_rate / cell.shear_modulus, 6))
+    assert seen_vi == vis and seen_kappa == kappas
