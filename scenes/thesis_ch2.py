@@ -3,6 +3,8 @@
     warpbem sweep scenes/fig2_09_11_tank_treading.toml --output-dir results/tank_treading
     warpbem sweep scenes/fig2_13_14_tumbling.toml --output-dir results/tumbling
     warpbem sweep scenes/tumbling_trembling.toml --output-dir results/tumbling_trembling
+    warpbem sweep scenes/tumbling_trembling.toml --vary bodies.0.mesh.aspect_ratio=0.625,0.775 \
+        --output-dir results/tumbling_trembling_fine
     python scenes/thesis_ch2.py
 
 for scenes/README.md:
@@ -163,7 +165,8 @@ def main():
         write(table, results / "tank_treading.csv", list(table[0]))
         for row in table:
             print({k: round(v, 4) for k, v in row.items()})
-    sweep = runs(results / "tumbling_trembling") if (results / "tumbling_trembling").is_dir() else []
+    sweep = [r for name in ("tumbling_trembling", "tumbling_trembling_fine") if (results / name).is_dir()
+             for r in runs(results / name)]
     thesis_cases = runs(results / "tumbling") if (results / "tumbling").is_dir() else []
     if sweep or thesis_cases:
         write(sweep + thesis_cases, results / "tumbling_trembling.csv", keys)

@@ -21,7 +21,9 @@ viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
                                 repulsion.cell_roughness)
     [deformation]               (deformable bodies; warpbem/elastic/deformable.py) relaxation =
                                 true (the fluid's resistance, tau = 3 mu / 2G; false:
-                                quasi-static), update_interval = 1 (steps between traction and
+                                quasi-static), surface_velocity = true (the flow sees the
+                                surface move with the material; false: the deformed shape
+                                rigid), update_interval = 1 (steps between traction and
                                 elastic solves)
     [time]                      end = 0.01, dt_max = 1e-4, dt_min = 1e-5, contact_gap = 5e-7,
                                 scheme = "heun", and frames by steps, frame_every = 1, or by
@@ -201,9 +203,11 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
     flow = _table("flow", table["flow"], {"shear_rate", "viscosity", "wall"}, ("shear_rate",))
     physics = _table("physics", table.get("physics", {}), {"gravity", "fluid_density", "repulsion", "adhesion"})
     adhesion = _table("adhesion", table.get("adhesion", {}), ADHESION_KEYS)
-    deformation = _table("deformation", table.get("deformation", {}), {"relaxation", "update_interval"})
+    deformation = _table("deformation", table.get("deformation", {}), {"relaxation", "update_interval",
+                                                                               "surface_velocity"})
     # validated even when no body deforms, so typos surface early
     relaxation = _bool("deformation.relaxation", deformation.get("relaxation", True))
+    surface_velocity = _bool("deformation.surface_velocity", deformation.get("surface_velocity", True))
     update_interval = _number("deformation.update_interval", deformation.get("update_interval", 1), 1, 1e6,
                               integer=True)
     repulsion = _table("repulsion", table.get("repulsion", {}),
@@ -281,7 +285,7 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
         interactions.append(Deformation(
             meshes_, [b.deformable for b in bodies], [b.shear_modulus for b in bodies],
             [b.poisson_ratio for b in bodies], flow_,
-            relaxation=relaxation, update_interval=update_interval))
+            relaxation=relaxation, surface_velocity=surface_velocity, update_interval=update_interval))
     tolerance = solver.get("tolerance")
     reuse = _number("solver.reuse_tolerance", solver.get("reuse_tolerance", ADHESION_REUSE_TOLERANCE if adhesive
                                                           else 0.0), 0, 1e-6)

@@ -5,7 +5,7 @@ frozen; the ``State`` holds what changes."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
@@ -159,12 +159,14 @@ class Model:
     def bodies(self, state: State) -> list[Body]:
         if len(state.positions) != self.n_bodies:
             raise ValueError(f"the state has {len(state.positions)} bodies, the model {self.n_bodies}")
-        meshes = list(self.meshes)
-        for x in self.interactions:  # deformable cells: the shapes of this state
+        meshes, slip = list(self.meshes), [None] * self.n_bodies
+        for x in self.interactions:  # deformable cells: the shapes of this state, their surfaces' motion
             if x.shapes_bodies and x.name in state.parts:
                 meshes = x.body_meshes(state.parts[x.name], meshes)
-        return [Body(m, position=p, orientation=q, fixed=f)
-                for m, p, q, f in zip(meshes, state.positions, state.orientations, self.fixed)]
+                slip = x.surface_velocities(state.parts[x.name], slip)
+        bodies = [Body(m, position=p, orientation=q, fixed=f)
+                  for m, p, q, f in zip(meshes, state.positions, state.orientations, self.fixed)]
+        return [b if v is None else replace(b, surface_velocity=v @ b.rotation().T) for b, v in zip(bodies, slip)]
 
     def initial_state(self, positions, orientations=None, time: float = 0.0) -> State:
         """The state at ``time`` with the bodies placed; each interaction's own part at its start."""

@@ -35,6 +35,17 @@ flow (Ca = mu gdot / G). ``relaxation = False`` takes u_(n+1) = u* (quasi-static
 4 at pi/4, the limit tau -> 0, which the relaxing model reaches by itself for stiff cells:
 tau = 0.4 us for G = 4 kPa).
 
+Surface motion (``surface_velocity = True``, the default). The flow sees the deformed surface
+moving as the material does: on top of the rigid motion (U, Omega) each element's surface moves
+with w = R du/dt, du/dt the displacement's rate over the last step (body frame), the slip of the
+mobility solve (``Body.surface_velocity``, its non-rigid part). A tank-treading cell's surface
+then slides along its steady shape instead of turning with it as a rigid body would; this is
+what lifts a deformed cell off the wall (the drift of drops, capsules and vesicles in wall shear:
+Smart & Leighton 1991; Abkarian, Lartigue & Viallat 2002). ``surface_velocity = False`` solves
+the deformed shape as rigid at the instant (it then drifts towards the wall, a finding of
+scenes/README.md). The rate lags by a step (first order in dt); the traction of the target is
+still the rigid shape's, the surface motion's own traction being what tau models.
+
 ``update_interval`` = m > 1 re-solves the target every m-th step only and relaxes towards the
 kept one (body frame) in between (model no more than the scene needs: a slow, stiff cell).
 
@@ -58,18 +69,22 @@ from ..surfaces.mesh import Mesh
 from .interior import InteriorElasticity, check_material
 from .shape import nodal_displacement, shear_plane_deformation
 
+CENTRE_NODE = 8  # of a QUAD9 element (surfaces/quad9.py): its collocation point
+
 
 class Deformation(Interaction):
     """Linear elastic deformation of the ``deformable`` bodies (module docstring): per body
     ``shear_modulus`` (Pa) and ``poisson_ratio``; ``flow`` the model's ``Flow``; ``relaxation``
-    the fluid's resistance to the deformation (False: quasi-static); the target re-solved every
+    the fluid's resistance to the deformation (False: quasi-static); ``surface_velocity`` the
+    flow seeing the surface move with the material; the target re-solved every
     ``update_interval`` steps."""
 
     name = "deformation"
     shapes_bodies = True
 
     def __init__(self, meshes, deformable, shear_modulus, poisson_ratio, flow, *, relaxation: bool = True,
-                 update_interval: int = 1, quadrature_order: int = 2, contact_refinement: float = 3.0):
+                 surface_velocity: bool = True, update_interval: int = 1, quadrature_order: int = 2,
+                 contact_refinement: float = 3.0):
         self.meshes = list(meshes)
         self.deformable = np.asarray(deformable, dtype=bool)
         if len(self.deformable) != len(self.meshes) or not self.deformable.any():
@@ -80,6 +95,7 @@ class Deformation(Interaction):
             raise ValueError(f"update_interval must be a whole number of steps >= 1, not {update_interval}")
         self.flow = flow
         self.relaxation, self.update_interval = bool(relaxation), int(update_interval)
+        self.surface_velocity = bool(surface_velocity)
         self.contact_refinement = contact_refinement
         self.quadrature_order = quadrature_order
         self.shear_modulus, self.poisson_ratio = list(shear_modulus), list(poisson_ratio)
@@ -103,13 +119,15 @@ class Deformation(Interaction):
         return {"node_displacement": ("m (body frame; rows past a mesh's nodes are zero)", (n, self.max_nodes, 3)),
                 "target_displacement": ("m (body frame: the elastic balance of the last traction solved)",
                                         (n, self.max_nodes, 3)),
+                "node_velocity": ("m/s (body frame: the displacement's rate over the last step)",
+                                  (n, self.max_nodes, 3)),
                 "steps_since_solve": ("1 (steps since the target was solved; per body, all alike)", (n,)),
                 "orientation": ("1 (quaternion w, x, y, z of the shape measured)", (n, 4))}
 
     def initial_state(self, bodies):
         zeros = np.zeros((len(self.meshes), self.max_nodes, 3))
         # the first step solves its target
-        return {"node_displacement": zeros, "target_displacement": zeros.copy(),
+        return {"node_displacement": zeros, "target_displacement": zeros.copy(), "node_velocity": zeros.copy(),
                 "steps_since_solve": np.full(len(self.meshes), float(self.update_interval)),
                 "orientation": np.array([b.orientation for b in bodies])}
 
@@ -118,6 +136,14 @@ class Deformation(Interaction):
         for i in np.flatnonzero(self.deformable):
             nodes = self.meshes[i].nodes
             out[i] = Mesh(nodes + part["node_displacement"][i, :len(nodes)], self.meshes[i].elements)
+        return out
+
+    def surface_velocities(self, part, velocities):
+        if not self.surface_velocity:
+            return velocities
+        out = list(velocities)
+        for i in np.flatnonzero(self.deformable):
+            out[i] = part["node_velocity"][i, self.meshes[i].elements[:, CENTRE_NODE]]  # at the collocation points
         return out
 
     def advance_shape(self, part, start_bodies, start_loads, end_orientations, dt):
@@ -132,6 +158,7 @@ class Deformation(Interaction):
             keep = np.exp(-dt / tau) if tau > 0 else 0.0
             displacement[i] = target[i] + (part["node_displacement"][i] - target[i]) * keep
         return {"node_displacement": displacement, "target_displacement": target, "steps_since_solve": age + 1.0,
+                "node_velocity": (displacement - part["node_displacement"]) / dt,
                 "orientation": np.array(end_orientations, dtype=float)}
 
     def _target(self, start_bodies, start_loads):

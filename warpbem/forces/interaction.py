@@ -28,7 +28,9 @@ its value after an accepted step in ``advance_state``; the step keeps it in
 Columns derived from it (``derived_columns``/``derived_values``) are written under their own
 names. ``longest_step`` bounds the step from a state (the bond kinetics: k dt << 1). An
 interaction that shapes bodies (deformable cells) gives their meshes from its part in
-``body_meshes`` and the part of the step's end in ``advance_shape``, from the start state.
+``body_meshes``, the velocity of their surfaces on top of the rigid motion in
+``surface_velocities``, and the part of the step's end in ``advance_shape``, from the start
+state.
 """
 
 from __future__ import annotations
@@ -137,6 +139,11 @@ class Interaction:
     def body_meshes(self, part: dict, meshes: list) -> list:
         """The meshes of the bodies at a state with this part (body frame); default unchanged."""
         return meshes
+
+    def surface_velocities(self, part: dict, velocities: list) -> list:
+        """Per body, the velocity (elements, 3; m/s, body frame) of its surface on top of its
+        rigid motion at a state with this part (a deforming cell's), or None; default unchanged."""
+        return velocities
 
     def prepare(self, device) -> None:
         """Put device data (kernels, static arrays) on ``device`` before the first step."""

@@ -131,6 +131,18 @@ def _finite(name, value, positive=False):
     return float(value)
 
 
+def non_rigid_part(geometry: SurfaceGeometry, body: int, surface_velocity: np.ndarray) -> np.ndarray:
+    """(3 n,) the body's per-element ``surface_velocity`` at its collocation points (refined
+    elements take their parent's value) less its rigid part, the least-squares fit of the six
+    rigid fields in the area-weighted inner product, so that the rigid motion the solver finds
+    is the whole rigid part of the surface's motion."""
+    start, stop = geometry.body_ranges[body]
+    w = surface_velocity[geometry.parent_element[start:stop]].ravel()
+    modes, weights = geometry.rigid_modes(body), np.repeat(geometry.areas[start:stop], 3)
+    gram = modes.T @ (weights[:, None] * modes)
+    return w - modes @ np.linalg.solve(gram, modes.T @ (weights * w))
+
+
 def dof_indices(elements: np.ndarray) -> np.ndarray:
     """Unknown indices 3a, 3a+1, 3a+2 of the given elements."""
     return (3 * np.asarray(elements)[:, None] + np.arange(3)).ravel()
@@ -347,8 +359,10 @@ class MobilitySolver:
         length = float(np.mean([b.mesh.equivalent_radius() for b in bodies]))
         fixed = np.array([b.fixed for b in bodies])
         prescribed = np.array([np.concatenate([b.velocity, b.angular_velocity * length]) for b in bodies])
+        slip = [b.surface_velocity for b in bodies] if background else [None] * len(bodies)
         speed = max(abs(self.shear_rate) * length, np.abs(forces).max() / (self.viscosity * length),
-                    np.abs(torques).max() / (self.viscosity * length**2), np.abs(prescribed).max())
+                    np.abs(torques).max() / (self.viscosity * length**2), np.abs(prescribed).max(),
+                    max((np.abs(v).max() for v in slip if v is not None), default=0.0))
         speed = speed if speed > 0 else 1.0
         force_scale = self.viscosity * speed * length  # N per scaled force unit
 
@@ -387,6 +401,9 @@ class MobilitySolver:
                 xi, np.concatenate(free_poles), np.concatenate(free_forces)).ravel()
         for p in np.flatnonzero(fixed):
             rhs[system.ranges[p]] += geometry.rigid_modes(p) @ (prescribed[p] / speed)
+        for p, velocity in enumerate(slip):  # U + Omega x r + w on the surface: w joins the right side
+            if velocity is not None:
+                rhs[system.ranges[p]] += non_rigid_part(geometry, p, velocity) / speed
 
         if initial_guess is not None and np.shape(initial_guess) != (system.size,):
             raise ValueError(f"initial_guess must have shape ({system.size},) for this scene, got"

@@ -43,6 +43,10 @@ class Body:
     ``fixed=True``: held; it moves with the prescribed ``velocity`` (m/s) and
     ``angular_velocity`` (rad/s), zero by default (an adherent cell at rest), and the solver
     returns the force and torque needed to hold it.
+
+    ``surface_velocity`` (free bodies; (elements, 3), m/s, world frame): the velocity of each
+    element's surface on top of the rigid motion (a deforming cell's, a squirmer's slip); only
+    its non-rigid part counts, the rigid motion being what the solver finds. None: rigid.
     """
 
     mesh: Mesh
@@ -51,6 +55,7 @@ class Body:
     fixed: bool = False
     velocity: tuple = (0.0, 0.0, 0.0)
     angular_velocity: tuple = (0.0, 0.0, 0.0)
+    surface_velocity: np.ndarray | None = None
 
     def __post_init__(self):
         if not isinstance(self.mesh, Mesh):
@@ -72,6 +77,15 @@ class Body:
             raise ValueError("a prescribed velocity needs fixed=True; free bodies get theirs from the solver")
         object.__setattr__(self, "velocity", velocity)
         object.__setattr__(self, "angular_velocity", angular_velocity)
+        if self.surface_velocity is not None:
+            slip = np.array(self.surface_velocity, dtype=float)
+            if slip.shape != (len(self.mesh.elements), 3) or not np.all(np.isfinite(slip)):
+                raise ValueError(f"surface_velocity must be finite, one 3-vector per element "
+                                 f"({len(self.mesh.elements)}, 3), got shape {slip.shape}")
+            if self.fixed:
+                raise ValueError("a surface_velocity is for free bodies; a fixed body's surface moves rigidly")
+            slip.setflags(write=False)
+            object.__setattr__(self, "surface_velocity", slip)
 
     def rotation(self) -> np.ndarray:
         return rotation_matrix(self.orientation)
