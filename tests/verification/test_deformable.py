@@ -20,6 +20,7 @@ import warpbem as wb
 from warpbem.app import cli, scene, xdmf
 from warpbem.dynamics import Flow, Model, Simulator, StepPolicy
 from warpbem.elastic.deformable import Deformation
+from warpbem.forces.repulsion import Repulsion
 
 A, CA, DT = 5e-6, 0.01, 1e-4
 
@@ -106,6 +107,33 @@ def test_a_tank_treading_cell_lifts_off_the_wall_when_its_surface_moves_with_the
             state, frame = sim.step(state)
         drift[moving] = frame.velocity[0, 2]
     assert drift[True] > 2e-3 * 100.0 * A and drift[False] < -2e-3 * 100.0 * A
+
+
+def test_a_cell_pressed_by_its_neighbours_repulsion_flattens_where_they_touch():
+    """Two G = 4 kPa cells (thesis fig. 3.1 b) in still fluid, 8 nm between their roughness
+    layers: the repulsion's contact load (225 pN, eq. 3.1) is a pair of equal and opposite point
+    loads at the closest points, spread over its Hertz patch (a = 0.41 um), and each cell's
+    surface there moves in (towards its centre), by less than Hertz's local approach a^2 / 2R*
+    = 34 nm: the 1.3 um elements of k = 4 cannot follow a 0.4 um patch (1.3 nm measured; 4.5 nm
+    at k = 8), so the mesh, not Hertz, sets the contact's resolution."""
+    mesh = wb.mesh.sphere(A, 4)
+    flow = Flow(0.0, 1.2e-3, False)
+    deformation = Deformation([mesh, mesh], [True, True], [4e3, 4e3], [0.33, 0.33], flow, relaxation=False)
+    model = Model([mesh, mesh], [False, False], flow, interactions=[Repulsion(), deformation],
+                  policy=StepPolicy(1e-6, 1e-9, 1e-9), scheme="euler")
+    sim = Simulator(model)
+    state = model.initial_state([[0.0, 0.0, 0.0], [2 * A + 358e-9, 0.0, 0.0]])
+    start = sim.evaluate(state)
+    (a, b) = model.interaction("repulsion").point_loads(start.contacts.bodies, start.contacts, None)
+    force = Repulsion().force(8e-9)
+    np.testing.assert_allclose(a[3], [-force, 0, 0], rtol=1e-6)
+    np.testing.assert_allclose(b[3], -a[3], rtol=1e-12)
+    hertz = deformation.contact_radius(0, 1, force) ** 2 / A  # a^2 / (2 R*), R* = a / 2
+    assert hertz == pytest.approx(34e-9, rel=0.02)
+    state, _ = sim.step(state)
+    u = state.parts["deformation"]["node_displacement"]
+    facing = np.argmax(mesh.nodes[:, 0]), np.argmin(mesh.nodes[:, 0])
+    assert -hertz < u[0, facing[0], 0] < -0.02 * hertz and hertz > u[1, facing[1], 0] > 0.02 * hertz
 
 
 def test_an_update_interval_solves_the_target_every_mth_step_and_relaxes_in_between():

@@ -141,6 +141,33 @@ def test_an_extra_contact_traction_is_balanced_by_the_fluid():
     assert np.abs((s.areas[:, None] * s.total_traction).sum(axis=0)).max() < 1e-3 * applied[2]
 
 
+@pytest.mark.parametrize("contact_radius", [2e-6, 0.0])
+def test_a_point_load_is_spread_over_its_hertz_patch_exactly(contact_radius):
+    """A contact load F at the bottom of a free sphere (k = 8), spread over a 2 um Hertz patch
+    (or, with radius 0, on the nearest element): the element tractions sum to F to rounding and
+    their moment is F's about the point to rounding on the symmetric patch, within |F| times
+    the shift to the nearest collocation point (0.49 um at k = 8) for the single element; they
+    peak at the point, and on the patch, whose moment about the centre is nil, the fluid
+    answers with Stokes's uniform -F / (4 pi a^2) to 1e-2 (the traction the extra-traction test
+    above checks; the shifted single element also turns the sphere)."""
+    force = np.array([0.0, 0.0, 1e-11])
+    point = np.array([0.0, 0.0, -A])
+    s = solve_traction([Body(wb.mesh.sphere(A, 8))], 0.0, MU, wall=False,
+                       point_loads=[(0, point, force, contact_radius)])
+    contact = s.total_traction - s.traction
+    np.testing.assert_allclose((s.areas[:, None] * contact).sum(axis=0), force, rtol=1e-12, atol=1e-24)
+    loaded = np.flatnonzero(np.abs(contact[:, 2]) > 0)
+    nearest = np.argmin(np.linalg.norm(s.points - point, axis=1))
+    shift = 1e-12 * A if contact_radius else 1.01 * np.linalg.norm(s.points[nearest] - point)
+    moment = (s.areas[:, None] * np.cross(s.points - point, contact)).sum(axis=0)
+    assert np.linalg.norm(moment) <= shift * np.linalg.norm(force)
+    assert (len(loaded) > 4 if contact_radius else len(loaded) == 1) and np.argmax(contact[:, 2]) == nearest
+    uniform = -force / (4 * np.pi * A**2)
+    assert not contact_radius or np.abs(s.traction - uniform).max() < 1e-2 * np.abs(uniform).max()
+    with pytest.raises(ValueError, match="point load on body 1: there are 1 bodies"):
+        solve_traction([Body(wb.mesh.sphere(A, 2))], 0.0, MU, wall=False, point_loads=[(1, point, force, 0.0)])
+
+
 @pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
 def test_on_the_surface_the_traction_holds_a_held_sphere_at_rest():
     """Eq. 2.18 on the surface itself (the single layer's self element by Duffy triangles): a

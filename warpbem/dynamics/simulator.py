@@ -209,8 +209,11 @@ class Simulator:
         if shapers:  # shapes first (the end's bodies are built with them), from the start state
             frame = start.frame(dt)
             loads = Loads(frame.force, frame.torque)
+            contact_loads = [load for x in self.model.interactions for load in
+                             x.point_loads(start.contacts.bodies, start.contacts, state.parts.get(x.name))]
             moved = replace(moved, parts={**state.parts, **{
-                x.name: x.advance_shape(state.parts[x.name], start.contacts.bodies, loads, moved.orientations, dt)
+                x.name: x.advance_shape(state.parts[x.name], start.contacts.bodies, loads, moved.orientations, dt,
+                                        contact_loads)
                 for x in shapers}})
         geometry = self.geometry(moved)
         if owners:  # interactions that own state advance it over the accepted motion

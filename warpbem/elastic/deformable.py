@@ -9,8 +9,8 @@ orientation R) of its reference mesh displaced in its body frame:
 u the node displacement of the state (``nodal_displacement`` of the element values). The body
 frame is the material's: R turns with the cell's rigid rotation, so the reference points X
 (material points) circulate around a steady shape (tank-treading, thesis fig. 2.12) while u
-keeps the shape. The flow sees the deformed surface as a rigid body at the instant (its
-mobility is solved on it).
+keeps the shape. The mobility is solved on the deformed surface, moving as described under
+"Surface motion" below.
 
 Elastic target. At a step the traction the fluid exerts on every body at the start state
 (``solve_traction``, closed by each body's total external load, the start frame's force and
@@ -54,8 +54,14 @@ mode in unbounded fluid: other modes, other shapes and the wall change the fluid
 to deformation (a thin gap resists more); the cell's own internal viscosity is not modelled.
 The target lags the traction by one step (first order in dt): it is solved at the start and
 carried by the step's rotation, so a cell spinning at Omega shows its inclination Omega dt
-behind. The traction is the fluid's only (contact tractions are for the adhesion coupling, not
-wired here).
+behind. The traction is the fluid's and the contact loads' of the interactions (``point_loads``:
+the repulsion's), each spread over its Hertz patch (thesis eq. 4.8-4.9); a patch narrower than
+the elements lands on the nearest one, so the mesh, not Hertz, sets the contact's resolution.
+A body load (gravity) has no surface traction: the fluid's balances it, so the cell's
+surface traction is out of balance by it (the elastic solve reports the imbalance; a settling
+cell's weight, 0.3 pN, is small against its fluid stresses, ~30 pN at 100 1/s). The film
+between close surfaces is in the fluid traction as far as the mesh resolves the gap; no
+lubrication formula is added on top (``forces/lubrication.py``).
 """
 
 from __future__ import annotations
@@ -65,6 +71,7 @@ import numpy as np
 from ..forces.interaction import Interaction
 from ..hydro.traction import solve_traction
 from ..surfaces.body import rotation_matrix
+from ..surfaces.gaps import WALL
 from ..surfaces.mesh import Mesh
 from .interior import InteriorElasticity, check_material
 from .shape import nodal_displacement, shear_plane_deformation
@@ -146,12 +153,12 @@ class Deformation(Interaction):
             out[i] = part["node_velocity"][i, self.meshes[i].elements[:, CENTRE_NODE]]  # at the collocation points
         return out
 
-    def advance_shape(self, part, start_bodies, start_loads, end_orientations, dt):
+    def advance_shape(self, part, start_bodies, start_loads, end_orientations, dt, point_loads):
         if not self.elastic:
             self.prepare(self.device)
         target, age = part["target_displacement"], part["steps_since_solve"]
         if age[0] >= self.update_interval:
-            target, age = self._target(start_bodies, start_loads), np.zeros_like(age)
+            target, age = self._target(start_bodies, start_loads, point_loads), np.zeros_like(age)
         displacement = np.zeros_like(part["node_displacement"])
         for i in self.elastic:
             tau = self.relaxation_time(i)
@@ -161,10 +168,27 @@ class Deformation(Interaction):
                 "node_velocity": (displacement - part["node_displacement"]) / dt,
                 "orientation": np.array(end_orientations, dtype=float)}
 
-    def _target(self, start_bodies, start_loads):
-        """u* of every deformable body: the elastic balance of the start state's traction."""
+    def contact_radius(self, body: int, other: int, force: float) -> float:
+        """Hertz radius a = (3 F R* / 4 E*)^(1/3) (m; thesis eq. 4.9) of a contact load F (N)
+        between ``body`` and ``other`` (a body or the wall), 1/R* = sum 1/R and 1/E* = sum (1 -
+        nu^2) / E over the two (the wall and rigid bodies do not yield); 0 if neither yields."""
+        pair = (body,) if other == WALL else (body, other)
+        compliance = sum((1 - self.poisson_ratio[i] ** 2) / (2 * self.shear_modulus[i] * (1 + self.poisson_ratio[i]))
+                         for i in pair if self.deformable[i])
+        curvature = sum(1.0 / self.meshes[i].equivalent_radius() for i in pair)
+        return float(np.cbrt(3 * abs(force) * compliance / (4 * curvature)))
+
+    def _target(self, start_bodies, start_loads, point_loads):
+        """u* of every deformable body: the elastic balance of the start state's traction, the
+        fluid's and the contact loads' (each spread over its Hertz patch, ``solve_traction``)."""
+        force, torque = start_loads.force.copy(), start_loads.torque.copy()
+        spread = []
+        for body, other, point, load in point_loads:  # these act on the surface, not as body loads
+            force[body] -= load
+            torque[body] -= np.cross(point - start_bodies[body].position, load)
+            spread.append((body, point, load, self.contact_radius(body, other, np.linalg.norm(load))))
         traction = solve_traction(start_bodies, self.flow.shear_rate, self.flow.viscosity, self.flow.wall,
-                                  start_loads.force, start_loads.torque, self.device,
+                                  force, torque, self.device, point_loads=spread,
                                   quadrature_order=self.quadrature_order, contact_refinement=self.contact_refinement)
         target = np.zeros((len(self.meshes), self.max_nodes, 3))
         for i, elastic in self.elastic.items():

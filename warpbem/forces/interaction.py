@@ -111,6 +111,12 @@ class Interaction:
         the law is not defined (layers that touch)."""
         raise NotImplementedError(f"{type(self).__name__} is not an implicit interaction")
 
+    def point_loads(self, bodies, contacts, part) -> list:
+        """The loads it puts on the bodies' surfaces at this state, for the traction that deforms
+        cells: (body, other (a body index or ``surfaces.refinement.WALL``), point (m), force (N))
+        each; the sum over them is part of the body's load. None here."""
+        return []
+
     def longest_step(self, bodies, contacts, part) -> float:
         """The longest step (s) this interaction allows from this state."""
         return np.inf
@@ -129,11 +135,12 @@ class Interaction:
     def advance_state(self, part: dict, start_bodies, end_bodies, end_contacts, dt: float, end_time: float) -> dict:
         return part
 
-    def advance_shape(self, part: dict, start_bodies, start_loads: Loads, end_orientations, dt: float) -> dict:
+    def advance_shape(self, part: dict, start_bodies, start_loads: Loads, end_orientations, dt: float,
+                      point_loads: list) -> dict:
         """The part of a step's end where it sets the bodies' shapes (deformable cells): from
         the start state's bodies and total external loads (those of its frame), the end's
-        orientations and the step dt (s); called before the end's bodies are built, so they take
-        the new shapes."""
+        orientations, the step dt (s) and the interactions' ``point_loads`` at the start (part of
+        its loads); called before the end's bodies are built, so they take the new shapes."""
         return part
 
     def body_meshes(self, part: dict, meshes: list) -> list:

@@ -96,6 +96,18 @@ class Repulsion(Interaction):
         """The separation at which the force equals ``load`` (N): ln(1 + F0 tau / load) / tau."""
         return np.log1p(self.coefficient * self.inverse_length / load) / self.inverse_length
 
+    def point_loads(self, bodies, contacts, part):
+        """Each contact's force at the state, at the closest points of both surfaces."""
+        loads = []
+        for gap in contacts.within(self.reach + 2.0 * self.cell_roughness):
+            eps = self.separation(gap.distance, gap.other == WALL)
+            force = float(self.force(eps)) if eps > 0 else 0.0
+            if force > 0:
+                loads.append((gap.body, gap.other, gap.point, force * gap.normal))
+                if gap.other != WALL:
+                    loads.append((gap.other, gap.body, gap.other_point, -force * gap.normal))
+        return loads
+
     def law(self, s):
         """U, F and dF/d(-eps) >= 0 at separations s (m); U = +inf where the layers touch."""
         s = np.asarray(s, dtype=float)

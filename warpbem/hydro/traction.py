@@ -30,6 +30,13 @@ elastic solve needs. The thesis adds t_c to the right-hand side of eq. 2.25 and 
 total; by linearity that is (1/2 + D*) (t + t_c) = t_inf + (1/2 + D*) t_c (deflated alike),
 the same solution, which here costs no extra product.
 
+Contact loads (repulsion, bonds) come as ``point_loads``: a force at a surface point, spread
+over the body's elements as a Hertz pressure p ~ sqrt(1 - r^2 / a_c^2) of the contact radius
+a_c (thesis eq. 4.8) sampled at the collocation points within it, scaled so that the element
+tractions sum to the force exactly; a patch narrower than the elements there (or a_c = 0: a
+bond) lands on the nearest element, its moment shifted by at most that element's distance
+(the body's balance takes the moment as spread). They join the extra traction.
+
 Units: the kernels see lengths over the bodies' mean radius L and tractions over a scale
 sigma_0 (the largest of mu |gdot|, |F| / L^2, |T| / L^3); the solution is in Pa.
 """
@@ -112,8 +119,28 @@ class TractionSolution:
         return ambient - disturbance * stress_scale * length / self.viscosity
 
 
+def spread_point_loads(geometry, length: float, point_loads, n_bodies: int) -> np.ndarray:
+    """(E, 3) traction (Pa) of ``point_loads`` (``solve_traction``) on ``geometry``'s elements."""
+    extra = np.zeros((geometry.n_elements, 3))
+    for body, point, force, radius in point_loads:
+        if not 0 <= body < n_bodies:
+            raise ValueError(f"point load on body {body}: there are {n_bodies} bodies")
+        if not (np.all(np.isfinite(force)) and np.isfinite(radius) and radius >= 0):
+            raise ValueError(f"point load on body {body}: force {force!r} and contact radius {radius!r} must be"
+                             " finite, the radius >= 0")
+        a, b = geometry.body_ranges[body]
+        areas = geometry.areas[a:b] * length**2
+        r2 = np.sum((geometry.collocation[a:b] * length - np.asarray(point, dtype=float)) ** 2, axis=1)
+        pressure = np.sqrt(np.clip(1.0 - r2 / radius**2, 0.0, None)) if radius > 0 else np.zeros(b - a)
+        if not pressure.any():
+            pressure[np.argmin(r2)] = 1.0
+        extra[a:b] += np.outer(pressure / np.dot(pressure, areas), force)
+    return extra
+
+
 def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wall: bool = True,
-                   forces=None, torques=None, device="cpu", *, extra_traction=None, quadrature_order: int = 2,
+                   forces=None, torques=None, device="cpu", *, extra_traction=None, point_loads=(),
+                   quadrature_order: int = 2,
                    tolerance: float | None = None, max_iterations: int = 600, dtype: str = "float64",
                    operator: str = "auto", contact_refinement: float = 3.0) -> TractionSolution:
     """Traction on every rigid body (SI units) in the flow u = shear_rate z e_x (Pa s viscosity,
@@ -122,8 +149,9 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wal
     it, for a fixed one the load that holds it): at rest in Stokes flow the fluid's load on a
     body is minus its external load and of any ``extra_traction`` (Pa, e.g. a contact's; module
     docstring): an (E, 3) array over the elements after contact refinement, or a function of
-    the collocation points and their unit normals ((E, 3) each, m) that returns one. Options as for
-    ``solve_mobility``."""
+    the collocation points and their unit normals ((E, 3) each, m) that returns one;
+    ``point_loads``: (body, point (m), force (N), contact radius (m)) each, spread as the module
+    docstring says (neither in ``forces``). Options as for ``solve_mobility``."""
     bodies = checked_bodies(bodies)
     shear_rate = _finite("shear_rate", shear_rate)
     viscosity = _finite("viscosity", viscosity, positive=True)
@@ -143,6 +171,7 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wal
     if extra.shape != (geometry.n_elements, 3) or not np.all(np.isfinite(extra)):
         raise ValueError(f"extra_traction must be finite with shape ({geometry.n_elements}, 3), one row per element"
                          f" after contact refinement; got {extra.shape}")
+    extra = extra + spread_point_loads(geometry, length, point_loads, len(bodies))
     for p, (a, b) in enumerate(geometry.body_ranges):
         arm = (geometry.collocation[a:b] - geometry.centres[p]) * length
         fluid_force[p] -= (geometry.areas[a:b, None] * length**2 * extra[a:b]).sum(axis=0)
