@@ -5,6 +5,10 @@
     warpbem sweep scenes/tumbling_trembling.toml --output-dir results/tumbling_trembling
     warpbem sweep scenes/tumbling_trembling.toml --vary bodies.0.mesh.aspect_ratio=0.625,0.775 \
         --output-dir results/tumbling_trembling_fine
+    warpbem sweep scenes/tumbling_trembling.toml --vary Vi=0.2 --vary bodies.0.mesh.aspect_ratio=0.625 \
+        --output-dir results/tumbling_trembling_fine2
+    warpbem sweep scenes/tumbling_trembling.toml --vary Vi=0.1 --vary bodies.0.mesh.aspect_ratio=0.775,0.8 \
+        --vary bodies.0.mesh.subdivisions=6 --output-dir results/tumbling_trembling_k6
     python scenes/thesis_ch2.py
 
 for scenes/README.md:
@@ -165,8 +169,12 @@ def main():
         write(table, results / "tank_treading.csv", list(table[0]))
         for row in table:
             print({k: round(v, 4) for k, v in row.items()})
-    sweep = [r for name in ("tumbling_trembling", "tumbling_trembling_fine") if (results / name).is_dir()
-             for r in runs(results / name)]
+    sweep = [r for name in ("tumbling_trembling", "tumbling_trembling_fine", "tumbling_trembling_fine2")
+             if (results / name).is_dir() for r in runs(results / name)]
+    if (results / "tumbling_trembling_k6").is_dir():  # the bracket's ends again at k = 6 (216 elements)
+        for r in runs(results / "tumbling_trembling_k6"):
+            print(f"k = 6: Vi = {r['Vi']:g}, kappa = {r['kappa']:g}: {r['regime']} (axis turned"
+                  f" {r['axis_turned_deg']:.0f} deg)")
     thesis_cases = runs(results / "tumbling") if (results / "tumbling").is_dir() else []
     if sweep or thesis_cases:
         write(sweep + thesis_cases, results / "tumbling_trembling.csv", keys)
