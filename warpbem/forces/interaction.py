@@ -30,7 +30,8 @@ names. ``longest_step`` bounds the step from a state (the bond kinetics: k dt <<
 interaction that shapes bodies (deformable cells) gives their meshes from its part in
 ``body_meshes``, the velocity of their surfaces on top of the rigid motion in
 ``surface_velocities``, and the part of the step's end in ``advance_shape``, from the start
-state.
+state. Interactions whose loads act at points of the surfaces (contacts) list them in
+``point_loads``, so that a deforming cell feels them where they act.
 """
 
 from __future__ import annotations
