@@ -111,11 +111,12 @@ def test_a_tank_treading_cell_lifts_off_the_wall_when_its_surface_moves_with_the
 
 def test_a_cell_pressed_by_its_neighbours_repulsion_flattens_where_they_touch():
     """Two G = 4 kPa cells (thesis fig. 3.1 b) in still fluid, 8 nm between their roughness
-    layers: the repulsion's contact load (225 pN, eq. 3.1) is a pair of equal and opposite point
-    loads at the closest points, spread over its Hertz patch (a = 0.41 um), and each cell's
-    surface there moves in (towards its centre), by less than Hertz's local approach a^2 / 2R*
-    = 34 nm: the 1.3 um elements of k = 4 cannot follow a 0.4 um patch (1.3 nm measured; 4.5 nm
-    at k = 8), so the mesh, not Hertz, sets the contact's resolution."""
+    layers: the repulsion (eq. 3.1; 225 pN at the state) acts over the step with its
+    backward-Euler force at the step's end, a pair of equal and opposite point loads at the
+    closest points, spread over its Hertz patch (a = 0.41 um); each cell's surface there moves
+    in (towards its centre), by less than Hertz's local approach a^2 / 2R* = 34 nm: the 1.3 um
+    elements of k = 4 cannot follow a 0.4 um patch (1.3 nm measured; 4.5 nm at k = 8), so the
+    mesh, not Hertz, sets the contact's resolution."""
     mesh = wb.mesh.sphere(A, 4)
     flow = Flow(0.0, 1.2e-3, False)
     deformation = Deformation([mesh, mesh], [True, True], [4e3, 4e3], [0.33, 0.33], flow, relaxation=False)
@@ -123,12 +124,14 @@ def test_a_cell_pressed_by_its_neighbours_repulsion_flattens_where_they_touch():
                   policy=StepPolicy(1e-6, 1e-9, 1e-9), scheme="euler")
     sim = Simulator(model)
     state = model.initial_state([[0.0, 0.0, 0.0], [2 * A + 358e-9, 0.0, 0.0]])
-    start = sim.evaluate(state)
-    (a, b) = model.interaction("repulsion").point_loads(start.contacts.bodies, start.contacts, None)
-    force = Repulsion().force(8e-9)
-    np.testing.assert_allclose(a[3], [-force, 0, 0], rtol=1e-6)
+    loads, (a, b) = sim.evaluate(state).step_loads(1e-6)
+    at_state = Repulsion().force(8e-9)
+    assert a[:2] == (0, 1) and b[:2] == (1, 0)
+    np.testing.assert_allclose(a[2], [A, 0, 0], atol=1e-12)
     np.testing.assert_allclose(b[3], -a[3], rtol=1e-12)
-    hertz = deformation.contact_radius(0, 1, force) ** 2 / A  # a^2 / (2 R*), R* = a / 2
+    assert 0.5 * at_state < -a[3][0] <= at_state and abs(a[3][1]) + abs(a[3][2]) < 1e-6 * at_state
+    np.testing.assert_allclose(loads.force, [a[3], b[3]], rtol=1e-9)  # all the load there is
+    hertz = deformation.contact_radius(0, 1, at_state) ** 2 / A  # a^2 / (2 R*), R* = a / 2
     assert hertz == pytest.approx(34e-9, rel=0.02)
     state, _ = sim.step(state)
     u = state.parts["deformation"]["node_displacement"]

@@ -69,6 +69,21 @@ class Evaluation:
         velocity, angular_velocity, _, _ = self.hydro.basis.combine(z)
         return b.velocity + velocity, b.angular_velocity + angular_velocity
 
+    def step_loads(self, dt: float) -> tuple[Loads, list]:
+        """The loads on the bodies over a step of dt from here (as the frame's, with the implicit
+        forces of the step's end, which move the bodies, in place of those at the state, which
+        may be far larger where a contact has closed in), and their part at points of the
+        surfaces (``ImplicitCoordinates.point_loads``): what deforms the cells over the step."""
+        b = self.hydro.background
+        if self.implicit is None:
+            return Loads(b.force, b.torque), []
+        x = self.implicit
+        z, magnitudes = x.system.solve(dt, [x.at_state_coefficients * 2.0**k for k in range(48)])
+        extra = self.hydro.basis.combine(z)
+        received = x.coordinates.loads(magnitudes, self.model.fixed_mask)
+        loads = Loads(b.force + extra[2] - received.force, b.torque + extra[3] - received.torque)
+        return loads, x.coordinates.point_loads(magnitudes)
+
     def frame(self, dt: float) -> Frame:
         """The record of this state; ``dt`` (s): the step that led here."""
         b = self.hydro.background
@@ -207,10 +222,7 @@ class Simulator:
         owners = [x for x in self.model.interactions if x.name in state.parts]
         shapers = [x for x in owners if x.shapes_bodies]
         if shapers:  # shapes first (the end's bodies are built with them), from the start state
-            frame = start.frame(dt)
-            loads = Loads(frame.force, frame.torque)
-            contact_loads = [load for x in self.model.interactions for load in
-                             x.point_loads(start.contacts.bodies, start.contacts, state.parts.get(x.name))]
+            loads, contact_loads = start.step_loads(dt)
             moved = replace(moved, parts={**state.parts, **{
                 x.name: x.advance_shape(state.parts[x.name], start.contacts.bodies, loads, moved.orientations, dt,
                                         contact_loads)

@@ -13,8 +13,8 @@ keeps the shape. The mobility is solved on the deformed surface, moving as descr
 "Surface motion" below.
 
 Elastic target. At a step the traction the fluid exerts on every body at the start state
-(``solve_traction``, closed by each body's total external load, the start frame's force and
-torque), turned into the body frame, gives through the interior elastic problem on the
+(``solve_traction``, closed by each body's total external load over the step,
+``Evaluation.step_loads``), turned into the body frame, gives through the interior elastic problem on the
 reference mesh (``interior.py``) the displacement u* = E[R_n^T t_n] that would balance it.
 
 Relaxation (``relaxation = True``, the default). The cell does not reach u* at once: as its
@@ -54,8 +54,9 @@ mode in unbounded fluid: other modes, other shapes and the wall change the fluid
 to deformation (a thin gap resists more); the cell's own internal viscosity is not modelled.
 The target lags the traction by one step (first order in dt): it is solved at the start and
 carried by the step's rotation, so a cell spinning at Omega shows its inclination Omega dt
-behind. The traction is the fluid's and the contact loads' of the interactions (``point_loads``:
-the repulsion's), each spread over its Hertz patch (thesis eq. 4.8-4.9); a patch narrower than
+behind. The traction is the fluid's and the contact loads' over the step (the implicit forces of
+the step's end where they act on the surfaces, ``ImplicitCoordinates.point_loads``: the
+repulsion's), each spread over its Hertz patch (thesis eq. 4.8-4.9); a patch narrower than
 the elements lands on the nearest one, so the mesh, not Hertz, sets the contact's resolution.
 A body load (gravity) has no surface traction: the fluid's balances it, so the cell's
 surface traction is out of balance by it (the elastic solve reports the imbalance; a settling

@@ -30,8 +30,9 @@ names. ``longest_step`` bounds the step from a state (the bond kinetics: k dt <<
 interaction that shapes bodies (deformable cells) gives their meshes from its part in
 ``body_meshes``, the velocity of their surfaces on top of the rigid motion in
 ``surface_velocities``, and the part of the step's end in ``advance_shape``, from the start
-state. Interactions whose loads act at points of the surfaces (contacts) list them in
-``point_loads``, so that a deforming cell feels them where they act.
+state. Implicit interactions whose forces act at points of the surfaces (contacts) give those
+points with their coordinates (``ImplicitCoordinates.points``), so that a deforming cell feels
+them where they act.
 """
 
 from __future__ import annotations
@@ -39,6 +40,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from ..surfaces.gaps import WALL
 
 
 @dataclass(frozen=True)
@@ -59,11 +62,14 @@ class Loads:
 @dataclass(frozen=True)
 class ImplicitCoordinates:
     """Coordinates s_c (m) of an implicit interaction at one state, and the loads on every body of
-    a unit (1 N) force along each: ``unit_force``, ``unit_torque`` (m, n_bodies, 3)."""
+    a unit (1 N) force along each: ``unit_force``, ``unit_torque`` (m, n_bodies, 3); ``points``
+    (m, n_bodies, 3; NaN where a body takes no load) where the unit force acts on each body's
+    surface, for the contact loads that deform cells, or None where that does not apply."""
 
     values: np.ndarray
     unit_force: np.ndarray
     unit_torque: np.ndarray
+    points: np.ndarray | None = None
 
     def rates(self, velocity: np.ndarray, angular_velocity: np.ndarray) -> np.ndarray:
         """ds_c/dt (m/s) for the rigid motions of the bodies (virtual work)."""
@@ -71,12 +77,18 @@ class ImplicitCoordinates:
                 + np.einsum("cbi,bi->c", self.unit_torque, angular_velocity))
 
     def part(self, where: slice) -> "ImplicitCoordinates":
-        return ImplicitCoordinates(self.values[where], self.unit_force[where], self.unit_torque[where])
+        return ImplicitCoordinates(self.values[where], self.unit_force[where], self.unit_torque[where],
+                                   None if self.points is None else self.points[where])
 
     @classmethod
     def join(cls, items) -> "ImplicitCoordinates":
+        items = list(items)
+        points = None
+        if any(x.points is not None for x in items):
+            points = np.concatenate([np.full(x.unit_force.shape, np.nan) if x.points is None else x.points
+                                     for x in items])
         return cls(*(np.concatenate([getattr(x, name) for x in items])
-                     for name in ("values", "unit_force", "unit_torque")))
+                     for name in ("values", "unit_force", "unit_torque")), points)
 
     def loads(self, magnitudes: np.ndarray, bodies_mask: np.ndarray | None = None) -> Loads:
         """Loads of the forces ``magnitudes`` (N) along the coordinates, on the bodies of
@@ -87,6 +99,19 @@ class ImplicitCoordinates:
             force[~bodies_mask] = 0.0
             torque[~bodies_mask] = 0.0
         return Loads(force, torque)
+
+    def point_loads(self, magnitudes: np.ndarray) -> list:
+        """(body, other (the body across the contact, or ``WALL``), point (m), force (N)) of the
+        forces ``magnitudes`` (N) along the coordinates that have points."""
+        out = []
+        if self.points is None:
+            return out
+        for c in np.flatnonzero(np.asarray(magnitudes) != 0):
+            loaded = np.flatnonzero(np.all(np.isfinite(self.points[c]), axis=1))
+            for b in loaded:
+                other = next((o for o in loaded if o != b), WALL)
+                out.append((int(b), int(other), self.points[c, b], magnitudes[c] * self.unit_force[c, b]))
+        return out
 
 
 class Interaction:
@@ -112,12 +137,6 @@ class Interaction:
         the law is not defined (layers that touch)."""
         raise NotImplementedError(f"{type(self).__name__} is not an implicit interaction")
 
-    def point_loads(self, bodies, contacts, part) -> list:
-        """The loads it puts on the bodies' surfaces at this state, for the traction that deforms
-        cells: (body, other (a body index or ``surfaces.refinement.WALL``), point (m), force (N))
-        each; the sum over them is part of the body's load. None here."""
-        return []
-
     def longest_step(self, bodies, contacts, part) -> float:
         """The longest step (s) this interaction allows from this state."""
         return np.inf
@@ -139,9 +158,10 @@ class Interaction:
     def advance_shape(self, part: dict, start_bodies, start_loads: Loads, end_orientations, dt: float,
                       point_loads: list) -> dict:
         """The part of a step's end where it sets the bodies' shapes (deformable cells): from
-        the start state's bodies and total external loads (those of its frame), the end's
-        orientations, the step dt (s) and the interactions' ``point_loads`` at the start (part of
-        its loads); called before the end's bodies are built, so they take the new shapes."""
+        the start state's bodies and the external loads over the step (the implicit forces of
+        the step's end, ``Evaluation.step_loads``), the end's orientations, the step dt (s) and
+        those loads' part at points of the surfaces (``ImplicitCoordinates.point_loads``);
+        called before the end's bodies are built, so they take the new shapes."""
         return part
 
     def body_meshes(self, part: dict, meshes: list) -> list:

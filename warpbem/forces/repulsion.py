@@ -96,18 +96,6 @@ class Repulsion(Interaction):
         """The separation at which the force equals ``load`` (N): ln(1 + F0 tau / load) / tau."""
         return np.log1p(self.coefficient * self.inverse_length / load) / self.inverse_length
 
-    def point_loads(self, bodies, contacts, part):
-        """Each contact's force at the state, at the closest points of both surfaces."""
-        loads = []
-        for gap in contacts.within(self.reach + 2.0 * self.cell_roughness):
-            eps = self.separation(gap.distance, gap.other == WALL)
-            force = float(self.force(eps)) if eps > 0 else 0.0
-            if force > 0:
-                loads.append((gap.body, gap.other, gap.point, force * gap.normal))
-                if gap.other != WALL:
-                    loads.append((gap.other, gap.body, gap.other_point, -force * gap.normal))
-        return loads
-
     def law(self, s):
         """U, F and dF/d(-eps) >= 0 at separations s (m); U = +inf where the layers touch."""
         s = np.asarray(s, dtype=float)
@@ -132,15 +120,16 @@ class Repulsion(Interaction):
                 other = "the wall" if gap.other == WALL else f"body {gap.other}"
                 raise PlacementError(f"the roughness layers of body {gap.body} and {other} touch"
                                      f" (gap {gap.distance:.4g} m)")
-            force, torque = np.zeros((n, 3)), np.zeros((n, 3))
+            force, torque, points = np.zeros((n, 3)), np.zeros((n, 3)), np.full((n, 3), np.nan)
             for body, point, sign in ((gap.body, gap.point, 1.0), (gap.other, gap.other_point, -1.0)):
                 if body != WALL:
                     force[body] = sign * gap.normal
                     torque[body] = sign * np.cross(point - bodies[body].position, gap.normal)
+                    points[body] = point
             rate = float(np.sum(force * velocity) + np.sum(torque * angular_velocity))
             if eps + dt * min(rate, 0.0) < self.reach:
-                kept.append((eps, force, torque))
+                kept.append((eps, force, torque, points))
         if not kept:
             return None
-        eps, force, torque = map(np.array, zip(*kept))
-        return ImplicitCoordinates(eps, force, torque)
+        eps, force, torque, points = map(np.array, zip(*kept))
+        return ImplicitCoordinates(eps, force, torque, points)
