@@ -114,3 +114,32 @@ def test_gap_to_the_wall_is_the_lowest_point(finder):
     assert g.distance <= samples[..., 2].min()
     assert g.distance == pytest.approx(2e-7, abs=2e-9)
     assert g.point[2] == pytest.approx(g.distance) and g.other_point[2] == 0.0
+
+
+def test_contacts_carry_the_points_where_their_forces_act():
+    """A cell 10 nm (between roughness layers) from the wall and from another cell: each
+    contact's coordinate holds its closest points, so forces along the coordinates become point
+    loads on the surfaces (for deforming cells): equal and opposite at the two closest points
+    between the cells, the wall's on the low cell alone (the wall is its ``other``); joined with
+    coordinates that have no points (bonds), those stay out."""
+    from warpbem.forces.interaction import ImplicitCoordinates
+    from warpbem.surfaces.gaps import Contacts
+
+    a = 5e-6
+    m = wb.mesh.sphere(a, 4)
+    rep = Repulsion()
+    low = a + 225e-9 + 10e-9
+    bodies = [wb.Body(m, position=(0.0, 0.0, low)), wb.Body(m, position=(2 * a + 360e-9, 0.0, low))]
+    contacts = Contacts(bodies, np.array([a, a]), True, GapFinder())
+    coordinates = rep.implicit_coordinates(bodies, contacts, None, np.zeros((2, 3)), np.zeros((2, 3)), 1e-6)
+    joined = ImplicitCoordinates.join([ImplicitCoordinates(np.zeros(1), np.ones((1, 2, 3)), np.zeros((1, 2, 3))),
+                                       coordinates])
+    loads = joined.point_loads(np.concatenate([[5e-12], np.full(len(coordinates.values), 1e-10)]))
+    pairs = {(b, o) for b, o, _, _ in loads}
+    assert pairs == {(0, WALL), (1, WALL), (0, 1), (1, 0)}
+    by = {(b, o): (p, f) for b, o, p, f in loads}
+    np.testing.assert_allclose(by[(0, WALL)][0], [0, 0, 225e-9 + 10e-9], atol=2e-9)
+    np.testing.assert_allclose(by[(0, WALL)][1], [0, 0, 1e-10], rtol=1e-9)
+    np.testing.assert_allclose(by[(0, 1)][1], -by[(1, 0)][1], rtol=1e-12)
+    np.testing.assert_allclose(by[(0, 1)][1], [-1e-10, 0, 0], atol=1e-18)
+    np.testing.assert_allclose(by[(0, 1)][0], [a, 0, low], atol=1e-12)
