@@ -8,7 +8,8 @@ height across the collision (fig. 3.4: the lower cell nudged towards the wall), 
 cell's surface moved in where they met (figs. 3.1-3.2: the contact flattening, largest inward
 normal displacement over the run), and the lubrication forces of eq. 3.7-3.8 evaluated along
 each run from its separation and relative velocity (fig. 3.3; charted, not applied:
-warpbem/forces/lubrication.py). Writes results/collision.csv and docs/figures/collision.png.
+warpbem/forces/lubrication.py); the heights also at the end of the shortest run, so that runs of
+different lengths compare. Writes results/collision.csv and docs/figures/collision.png.
 """
 
 from __future__ import annotations
@@ -85,6 +86,11 @@ def main():
     cases = [case(p) for p in sorted(folder.glob("point*.h5"))]
     if not cases:
         raise SystemExit(f"no runs in {folder}: warpbem sweep scenes/fig3_01_04_collision.toml --output-dir {folder}")
+    common = min(c["t"][-1] for c in cases)  # runs of different lengths side by side
+    for c in cases:
+        i = np.searchsorted(c["t"], common * (1 + 1e-9), side="right") - 1
+        c.update(common_s=c["t"][i], lower_dz_common_um=(c["x"][i, 0, 2] - c["x"][0, 0, 2]) * 1e6,
+                 upper_dz_common_um=(c["x"][i, 1, 2] - c["x"][0, 1, 2]) * 1e6, end_s=c["t"][-1])
     keys = [k for k in cases[0] if k not in ("t", "x", "eps", "squeeze", "shear")]
     out = ROOT / "results" / "collision.csv"
     with out.open("w", newline="") as f:
