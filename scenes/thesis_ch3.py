@@ -64,17 +64,20 @@ def case(path: Path) -> dict:
 
 def chart(cases, path):
     import matplotlib.pyplot as plt
-    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.3))
+    fig, (left, middle, right) = plt.subplots(1, 3, figsize=(15, 4.3))
     for c, style in zip(cases, ("-", "--", ":")):
         for i, name in enumerate(("lower", "upper")):
             left.plot(c["x"][:, i, 0] * 1e6, c["x"][:, i, 2] * 1e6, style, color=f"C{i}",
                       label=f"{name}, {c['case']}")
+        middle.plot(c["t"] * 1e3, (c["x"][:, 0, 2] - c["x"][0, 0, 2]) * 1e9, style, color="C0",
+                    label=f"lower cell, {c['case']}")
         right.loglog(c["eps"] * 1e9, c["squeeze"] * 1e12, style, color="C2", label=f"squeeze (eq. 3.7), {c['case']}")
         right.loglog(c["eps"] * 1e9, c["shear"] * 1e12, style, color="C3", label=f"shear (eq. 3.8), {c['case']}")
     left.set(xlabel="x [um] (flow)", ylabel="z [um] (above the wall)", title="trajectories (thesis fig. 3.4)")
+    middle.set(xlabel="t [ms]", ylabel="height change [nm]", title="the lower cell nudged towards the wall")
     right.set(xlabel="separation of the cells' surfaces [nm]", ylabel="lubrication force [pN]",
               title="film forces along the runs (thesis fig. 3.3)")
-    for a in (left, right):
+    for a in (left, middle, right):
         a.legend(fontsize=6)
     fig.tight_layout()
     fig.savefig(path, dpi=130)
