@@ -21,7 +21,6 @@
 Writes results/bench/adhesion_*.csv and adhesion.png.
 """
 
-import argparse
 import csv
 import time
 import warnings
@@ -29,7 +28,7 @@ import warnings
 import numpy as np
 
 import warpbem as wb
-from common import output, print_table, pyplot, save_chart, write_csv
+from common import arguments, output, print_table, pyplot, save_chart, write_csv
 from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy
 from warpbem.dynamics.simulator import Simulator
 from warpbem.forces.adhesion import Adhesion
@@ -276,9 +275,7 @@ def interaction_chart(rows, path):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--quick", action="store_true", help="smaller sizes and shorter runs")
-    parser.add_argument("--device", default="cpu")
+    parser = arguments(__doc__)
     parser.add_argument("--parts", default="kernels,reuse,interaction,step,speed",
                         help="comma-separated parts to run: kernels, reuse (with the lateral lattice), interaction, step,"
                              " speed, scene")

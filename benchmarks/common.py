@@ -1,5 +1,6 @@
 """Shared helpers of the benchmark scripts: output folder, CSV tables, charts, timing."""
 
+import argparse
 import csv
 import time
 from pathlib import Path
@@ -7,6 +8,15 @@ from pathlib import Path
 import numpy as np
 
 OUT = Path(__file__).resolve().parent.parent / "results" / "bench"
+
+
+def arguments(doc: str) -> argparse.ArgumentParser:
+    """The parser every sized benchmark starts from: its docstring as help, ``--quick`` (smaller
+    sizes and shorter runs) and ``--device`` (cpu, cuda:0, ...)."""
+    parser = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true", help="smaller sizes and shorter runs")
+    parser.add_argument("--device", default="cpu")
+    return parser
 
 
 def output(name: str) -> Path:

@@ -19,14 +19,13 @@ Writes results/bench/deformable_theory.csv, deformable_interval.csv and the char
 deformable_theory.png and deformable_interval.png.
 """
 
-import argparse
 import time
 import warnings
 
 import numpy as np
 
 import warpbem as wb
-from common import output, print_table, pyplot, save_chart, write_csv
+from common import arguments, output, print_table, pyplot, save_chart, write_csv
 from warpbem.dynamics import Flow, Model, Simulator, StepPolicy
 from warpbem.elastic.deformable import Deformation
 
@@ -133,10 +132,8 @@ def interval_chart(rows, path):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = arguments(__doc__)
     parser.add_argument("--parts", default="theory,interval")
-    parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--device", default="cpu")
     args = parser.parse_args()
     parts = args.parts.split(",")
     if "theory" in parts:

@@ -11,13 +11,12 @@ over the mesh refinement k (6 k^2 elements per sphere), on the machine it runs o
 Writes results/bench/deformation.csv and deformation.png (error against time).
 """
 
-import argparse
 import warnings
 
 import numpy as np
 
 import warpbem as wb
-from common import best_time, output, print_table, pyplot, save_chart, write_csv
+from common import arguments, best_time, output, print_table, pyplot, save_chart, write_csv
 from warpbem.elastic.interior import InteriorElasticity
 from warpbem.surfaces.body import Body
 
@@ -70,9 +69,7 @@ def chart(traction_rows, elastic_rows, path):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--device", default="cpu")
+    parser = arguments(__doc__)
     args = parser.parse_args()
     ks = [2, 4] if args.quick else [2, 4, 8, 12]
     print("1. traction (completed adjoint double layer)")

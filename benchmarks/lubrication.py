@@ -16,7 +16,6 @@ film twice.
 Writes results/bench/lubrication.csv and lubrication.png.
 """
 
-import argparse
 import sys
 import warnings
 from pathlib import Path
@@ -24,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 import warpbem as wb
-from common import output, print_table, pyplot, save_chart, write_csv
+from common import arguments, output, print_table, pyplot, save_chart, write_csv
 from warpbem.forces.lubrication import shear_force, squeeze_force
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "verification"))
@@ -86,9 +85,7 @@ def chart(rows, ks, path):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--device", default="cpu")
+    parser = arguments(__doc__)
     args = parser.parse_args()
     ks = [4] if args.quick else [4, 8]
     gaps = [1e-6, 1e-7] if args.quick else [2e-6, 1e-6, 5e-7, 3.5e-7, 2.5e-7, 1e-7, 5e-8, 2e-8]

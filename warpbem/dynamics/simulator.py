@@ -20,7 +20,7 @@ and is also the first stage of the next step, so writing a frame costs no extra 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -58,14 +58,22 @@ class Evaluation:
     explicit: dict  # {interaction name: Loads}
     hydro: Hydrodynamics
     implicit: Implicit | None
+    _steps: dict = field(default_factory=dict, repr=False, compare=False)  # dt -> implicit_step(dt)
+
+    def implicit_step(self, dt: float):
+        """(coefficients z, forces f(s')) of the backward-Euler step of dt from here, solved once
+        per dt (the motion and the step's loads both need them)."""
+        if dt not in self._steps:
+            at_state = self.implicit.at_state_coefficients
+            self._steps[dt] = self.implicit.system.solve(dt, [at_state * 2.0**k for k in range(48)])
+        return self._steps[dt]
 
     def motion(self, dt: float):
         """(U, Omega) over a step of dt from here: the implicit forces of the step's end."""
         b = self.hydro.background
         if self.implicit is None:
             return b.velocity, b.angular_velocity
-        at_state = self.implicit.at_state_coefficients
-        z, _ = self.implicit.system.solve(dt, [at_state * 2.0**k for k in range(48)])
+        z, _ = self.implicit_step(dt)
         velocity, angular_velocity, _, _ = self.hydro.basis.combine(z)
         return b.velocity + velocity, b.angular_velocity + angular_velocity
 
@@ -78,7 +86,7 @@ class Evaluation:
         if self.implicit is None:
             return Loads(b.force, b.torque), []
         x = self.implicit
-        z, magnitudes = x.system.solve(dt, [x.at_state_coefficients * 2.0**k for k in range(48)])
+        z, magnitudes = self.implicit_step(dt)
         extra = self.hydro.basis.combine(z)
         received = x.coordinates.loads(magnitudes, self.model.fixed_mask)
         loads = Loads(b.force + extra[2] - received.force, b.torque + extra[3] - received.torque)

@@ -69,6 +69,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..forces.adhesion import compliance, hertz_radius
 from ..forces.interaction import Interaction
 from ..hydro.traction import solve_traction
 from ..surfaces.body import rotation_matrix
@@ -174,10 +175,9 @@ class Deformation(Interaction):
         between ``body`` and ``other`` (a body or the wall), 1/R* = sum 1/R and 1/E* = sum (1 -
         nu^2) / E over the two (the wall and rigid bodies do not yield); 0 if neither yields."""
         pair = (body,) if other == WALL else (body, other)
-        compliance = sum((1 - self.poisson_ratio[i] ** 2) / (2 * self.shear_modulus[i] * (1 + self.poisson_ratio[i]))
-                         for i in pair if self.deformable[i])
+        total = sum(compliance(self.shear_modulus[i], self.poisson_ratio[i]) for i in pair if self.deformable[i])
         curvature = sum(1.0 / self.meshes[i].equivalent_radius() for i in pair)
-        return float(np.cbrt(3 * abs(force) * compliance / (4 * curvature)))
+        return float(hertz_radius(abs(force), 1.0 / curvature, total))
 
     def _target(self, start_bodies, start_loads, point_loads):
         """u* of every deformable body: the elastic balance of the start state's traction, the

@@ -61,10 +61,19 @@ def _positive(name, value, allow_zero=False):
     return float(value)
 
 
+def compliance(shear_modulus, poisson_ratio):
+    """(1 - nu^2) / E (1/Pa), E = 2 G (1 + nu): a body's share of 1 / E* in Hertz's contact."""
+    return (1.0 - poisson_ratio**2) / (2.0 * shear_modulus * (1.0 + poisson_ratio))
+
+
+def hertz_radius(normal_force, effective_radius, total_compliance):
+    """a = (3 F R* / (4 E*))^(1/3) (thesis eq. 4.9), 1 / E* the sum of the bodies' compliances."""
+    return np.cbrt(3.0 * np.maximum(normal_force, 0.0) * effective_radius * total_compliance / 4.0)
+
+
 def hertz_contact_radius(normal_force, radius, shear_modulus, poisson_ratio):
-    """a_s = (3 F a / (4 E*))^(1/3), E* = E / (1 - nu^2), E = 2 G (1 + nu) (thesis eq. 4.9)."""
-    young = 2.0 * shear_modulus * (1.0 + poisson_ratio)
-    return np.cbrt(3.0 * np.maximum(normal_force, 0.0) * radius * (1.0 - poisson_ratio**2) / (4.0 * young))
+    """a_s of a cell on the rigid wall: R* = a, E* = E / (1 - nu^2), E = 2 G (1 + nu) (eq. 4.9)."""
+    return hertz_radius(normal_force, radius, compliance(shear_modulus, poisson_ratio))
 
 
 def contact_traction(normal_force, contact_radius):
