@@ -12,11 +12,20 @@ solving its elastic target less often.
    7.75 um above the wall, 100 steps of 0.1 ms, its elastic target (the traction and elastic
    solves) updated every m = 1, 2, 4, 8, 16 steps: the error of the node displacements and of
    the path against m = 1, and the speed-up, side by side in one run.
+3. speed (item 11): wall time per step of one deformable cell (k = 4 and 8: 96 and 384
+   elements; eta = 1 Pa, 7.75 um above the wall, steps of 0.1 ms) against the same cell rigid,
+   side by side in one run (rigid and deformable steps interleaved, after two warm-up steps),
+   with the deformable step's share spent in the traction and the elastic solves.
+4. limits (item 10): where the scheme fails, a k = 4 cell in unbounded shear: the viscous
+   number Ca = 0.2, 0.5, 1 (steps of 0.1 ms for 10 tau; the steady D against Roscoe's, the
+   largest max |u| / a, what the solver said) and the step at Ca = 0.1 (dt = 0.1 to 10 ms: the
+   errors of D and of the tilt from 45 degrees, the turn per step).
 
-    python benchmarks/deformable_shear.py [--parts theory,interval] [--quick] [--device cuda:0]
+    python benchmarks/deformable_shear.py [--parts theory,interval,speed,limits] [--quick] [--device cuda:0]
 
-Writes results/bench/deformable_theory.csv, deformable_interval.csv and the charts
-deformable_theory.png and deformable_interval.png.
+Writes results/bench/deformable_theory.csv, deformable_interval.csv, deformable_speed.csv,
+deformable_limits.csv and the charts deformable_theory.png, deformable_interval.png and
+deformable_speed.png.
 """
 
 import time
@@ -27,6 +36,7 @@ import numpy as np
 import warpbem as wb
 from common import arguments, output, print_table, pyplot, save_chart, write_csv
 from warpbem.dynamics import Flow, Model, Simulator, StepPolicy
+from warpbem.elastic import deformable, interior
 from warpbem.elastic.deformable import Deformation
 
 warnings.simplefilter("ignore", wb.ContactResolutionWarning)
@@ -38,11 +48,11 @@ def roscoe(ca):
     return 5 * ca / (2 * np.sqrt(4 + 9 * ca ** 2)), 0.5 * np.arctan(1.5 * ca)
 
 
-def cell(k, modulus, dt, wall, device, *, height=0.0, **options):
+def cell(k, modulus, dt, wall, device, *, height=0.0, rigid=False, **options):
     mesh = wb.mesh.sphere(A, k)
     flow = Flow(SHEAR, MU, wall)
-    model = Model([mesh], [False], flow, policy=StepPolicy(dt, 1e-7, 1e-9), scheme="euler",
-                  interactions=[Deformation([mesh], [True], [modulus], [NU], flow, **options)])
+    shape = [] if rigid else [Deformation([mesh], [True], [modulus], [NU], flow, **options)]
+    model = Model([mesh], [False], flow, policy=StepPolicy(dt, 1e-7, 1e-9), scheme="euler", interactions=shape)
     return Simulator(model, device), model.initial_state([[0.0, 0.0, height]])
 
 
@@ -131,9 +141,94 @@ def interval_chart(rows, path):
     return save_chart(fig, path, (ax,), legend_size=8)
 
 
+class Stopwatch:
+    """Wraps a function of a module so that the seconds spent in it add up in ``seconds``."""
+
+    def __init__(self, module, name):
+        self.module, self.name, self.inner, self.seconds = module, name, getattr(module, name), 0.0
+
+        def timed(*args, **kwargs):
+            start = time.perf_counter()
+            try:
+                return self.inner(*args, **kwargs)
+            finally:
+                self.seconds += time.perf_counter() - start
+
+        setattr(module, name, timed)
+
+
+def speed_rows(ks, steps, device):
+    traction = Stopwatch(deformable, "solve_traction")
+    elastic = Stopwatch(interior.InteriorElasticity, "solve")
+    rows = []
+    for k in ks:
+        runs = {kind: cell(k, 1.0, 1e-4, True, device, height=7.75e-6, rigid=kind == "rigid")
+                for kind in ("rigid", "deformable")}
+        for sim, state in runs.values():
+            for _ in range(2):  # warm-up: kernels, the cell's elastic operators
+                state, _ = sim.step(state)
+        states = {kind: state for kind, (sim, state) in runs.items()}
+        seconds = dict.fromkeys(runs, 0.0)
+        traction.seconds = elastic.seconds = 0.0
+        for _ in range(steps):
+            for kind, (sim, _) in runs.items():
+                start = time.perf_counter()
+                states[kind], _ = sim.step(states[kind])
+                seconds[kind] += time.perf_counter() - start
+        rows.append(dict(k=k, elements=6 * k * k, rigid_s_per_step=seconds["rigid"] / steps,
+                         deformable_s_per_step=seconds["deformable"] / steps,
+                         ratio=seconds["deformable"] / seconds["rigid"],
+                         traction_share=traction.seconds / seconds["deformable"],
+                         elastic_share=elastic.seconds / seconds["deformable"]))
+        print_table(rows[-1:])
+    return rows
+
+
+def speed_chart(rows, path):
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    labels = [f"k = {r['k']} ({r['elements']} el.)" for r in rows]
+    x = np.arange(len(rows))
+    rigid = np.array([r["rigid_s_per_step"] for r in rows])
+    total = np.array([r["deformable_s_per_step"] for r in rows])
+    traction = total * [r["traction_share"] for r in rows]
+    elastic = total * [r["elastic_share"] for r in rows]
+    ax.bar(x - 0.2, rigid, 0.4, label="rigid cell")
+    ax.bar(x + 0.2, total - traction - elastic, 0.4, label="deformable: mobility and the rest")
+    ax.bar(x + 0.2, traction, 0.4, bottom=total - traction - elastic, label="deformable: traction solve")
+    ax.bar(x + 0.2, elastic, 0.4, bottom=total - elastic, label="deformable: elastic solve")
+    ax.set_xticks(x, labels)
+    ax.set(ylabel="wall time per step [s]", title="one cell 7.75 um above the wall, 2-core CPU")
+    return save_chart(fig, path, (ax,), legend_size=8)
+
+
+def limit_row(ca, dt, device):
+    """One run of a k = 4 cell in shear to 10 tau (at least 2 ms, 10 steps): its last D and
+    tilt against Roscoe's, the largest max |u| / a, and the solver's warnings or its stop."""
+    sim, state = cell(4, MU * SHEAR / ca, dt, False, device)
+    steps = max(int(round(max(15 * ca / SHEAR, 2e-3) / dt)), 10)
+    d_exact, tilt_exact = roscoe(ca)
+    amplitude, outcome, frame = 0.0, "ran", None
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", wb.DeformationWarning)
+        try:
+            for _ in range(steps):
+                state, frame = sim.step(state)
+                amplitude = max(amplitude, np.abs(state.parts["deformation"]["node_displacement"][0]).max() / A)
+        except wb.DeformationError as err:
+            outcome = f"stopped at t = {state.time * 1e3:.1f} ms: {str(err).split(':')[1].strip()}"
+    said = sorted({str(w.message).split(":")[1].split(",")[0].strip() for w in caught
+                   if issubclass(w.category, wb.DeformationWarning)})
+    d, tilt = (np.nan, np.nan) if frame is None else (frame.derived["taylor_deformation"][0],
+                                                      np.pi / 4 - frame.derived["inclination_angle"][0])
+    return dict(Ca=ca, dt_ms=dt * 1e3, turn_per_step=SHEAR / 2 * dt, D=d, D_error=d / d_exact - 1,
+                tilt_deg=np.degrees(tilt), tilt_error=tilt / tilt_exact - 1, max_u_over_a=amplitude,
+                outcome=outcome if not said else f"{outcome}; warned: {'; '.join(said)}")
+
+
 def main():
     parser = arguments(__doc__)
-    parser.add_argument("--parts", default="theory,interval")
+    parser.add_argument("--parts", default="theory,interval,speed,limits")
     args = parser.parse_args()
     parts = args.parts.split(",")
     if "theory" in parts:
@@ -150,6 +245,22 @@ def main():
         print_table(rows)
         write_csv("deformable_interval.csv", rows)
         print("chart:", interval_chart(rows, output("deformable_interval.png")))
+    if "speed" in parts:
+        print("\n3. wall time per step: one deformable cell against the same cell rigid")
+        rows = speed_rows([4] if args.quick else [4, 8], 3 if args.quick else 10, args.device)
+        print_table(rows)
+        write_csv("deformable_speed.csv", rows)
+        print("chart:", speed_chart(rows, output("deformable_speed.png")))
+    if "limits" in parts:
+        print("\n4. where the scheme fails: the viscous number and the step (k = 4, unbounded shear)")
+        cases = [(0.2, 1e-4), (1.0, 1e-4)] if args.quick else [(0.2, 1e-4), (0.5, 1e-4), (1.0, 1e-4), (0.1, 1e-4),
+                                                              (0.1, 1e-3), (0.1, 3e-3), (0.1, 1e-2)]
+        rows = []
+        for ca, dt in cases:
+            rows.append(limit_row(ca, dt, args.device))
+            print_table(rows[-1:])
+        print_table(rows)
+        write_csv("deformable_limits.csv", rows)
 
 
 if __name__ == "__main__":

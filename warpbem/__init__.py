@@ -6,6 +6,7 @@ Layers (each imports only those before it): ``surfaces`` (meshes, bodies, gaps) 
 State, the step) -> ``app`` (scene files, runs, sweeps, output, command line)."""
 
 from . import units
+from .elastic.deformable import DeformationError, DeformationWarning
 from .hydro.linalg import ConvergenceError
 from .hydro.mobility import ContactResolutionWarning, MobilitySolution, MobilitySolver, solve_mobility
 from .hydro.traction import TractionSolution, solve_traction
@@ -16,5 +17,5 @@ from .surfaces.placement import PlacementError
 
 __version__ = "0.1.0"
 __all__ = ["mesh", "units", "Body", "solve_mobility", "MobilitySolver", "MobilitySolution", "solve_traction",
-           "TractionSolution", "ConvergenceError",
+           "TractionSolution", "ConvergenceError", "DeformationError", "DeformationWarning",
            "MeshError", "PlacementError", "ContactResolutionWarning", "__version__"]

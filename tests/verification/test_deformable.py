@@ -201,3 +201,43 @@ def test_a_deformable_body_needs_its_modulus(tmp_path):
     path.write_text(SCENE.replace("shear_modulus = 10.0\n", ""))
     with pytest.raises(scene.SceneError, match="give its shear_modulus"):
         scene.load(path)
+
+
+def test_a_cell_past_the_linear_range_warns_and_one_past_its_limit_stops(tmp_path, capsys):
+    """The limits of the model (module docstring, "where it fails"): quasi-static k = 2 cells in
+    unbounded shear reach max |u| / a ~ 5 Ca / 4 in one step; at Ca = 0.3 (0.38) that is past
+    LINEAR_RANGE = 0.2 and warns once; at Ca = 0.6 (0.75) past LINEAR_LIMIT = 0.5, and
+    ``warpbem run`` stops with the reason and exit status 1, its first frame kept."""
+    _, model, sim = cell_in_shear(2, 0.3, DT, relaxation=False)
+    state = model.initial_state([[0.0, 0.0, 0.0]])
+    with pytest.warns(wb.DeformationWarning, match="past 0.2"):
+        state, _ = sim.step(state)
+    assert np.abs(state.parts["deformation"]["node_displacement"]).max() > 0.2 * A
+    path, output = tmp_path / "cell.toml", tmp_path / "cell.h5"
+    path.write_text(SCENE.replace("shear_modulus = 10.0", "shear_modulus = 0.1667"))  # Ca = 0.6
+    assert cli.main(["run", str(path), "--output", str(output)]) == 1
+    assert "stopped: body 0: its displacement reached" in capsys.readouterr().err
+    with h5py.File(output) as run:
+        assert run["time"][0] == 0.0
+
+
+def test_a_folding_surface_stops_the_run_and_a_coarse_step_warns():
+    """An element whose centre node is moved half way to its corner folds (its normal at a node
+    turns by more than 90 degrees) at max |u| / a = 0.11, inside the linear range: it stops;
+    a fifth of the way it does not fold. A step that turns the cell by more than 0.1 rad (Omega
+    dt = 0.125 in shear at 100 1/s, dt = 2.5 ms) warns that its shape lags the material."""
+    mesh = wb.mesh.sphere(A, 4)
+    deformation = Deformation([mesh], [True], [1.0], [0.33], Flow(100.0, 1e-3, False))
+    deformation.prepare("cpu")
+    element = mesh.elements[0]
+    u = np.zeros_like(mesh.nodes)
+    for share, folds in ((0.2, False), (0.5, True)):
+        u[element[8]] = share * (mesh.nodes[element[2]] - mesh.nodes[element[8]])
+        if folds:
+            with pytest.raises(wb.DeformationError, match="folds"):
+                deformation._check(0, u, [1, 0, 0, 0], [1, 0, 0, 0], DT)
+        else:
+            deformation._check(0, u, [1, 0, 0, 0], [1, 0, 0, 0], DT)
+    _, model, sim = cell_in_shear(2, CA, 2.5e-3)
+    with pytest.warns(wb.DeformationWarning, match="lags the material"):
+        sim.step(model.initial_state([[0.0, 0.0, 0.0]]))

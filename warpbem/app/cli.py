@@ -70,6 +70,7 @@ def _demo(args, parser):
 
 
 def _run(args, parser):
+    from .. import ConvergenceError, DeformationError
     from . import run as runner
 
     if not args.resume and not args.scene:
@@ -81,6 +82,9 @@ def _run(args, parser):
         print(f"interrupted: the frames so far are in {args.output}; continue with"
               f" warpbem run --resume --output {args.output}", file=sys.stderr)
         return 130
+    except (DeformationError, ConvergenceError) as err:  # the scene left what its model can do
+        print(f"warpbem run: stopped: {err}. The frames before it are in {args.output}", file=sys.stderr)
+        return 1
     return 0
 
 

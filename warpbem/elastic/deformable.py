@@ -63,9 +63,23 @@ surface traction is out of balance by it (the elastic solve reports the imbalanc
 cell's weight, 0.3 pN, is small against its fluid stresses, ~30 pN at 100 1/s). The film
 between close surfaces is in the fluid traction as far as the mesh resolves the gap; no
 lubrication formula is added on top (``forces/lubrication.py``).
+
+Where it fails, and what the solver does there (measured: README, "Stability of deformable
+cells"). The displacement's amplitude, max |u| / a (a the equivalent radius), past
+``LINEAR_RANGE`` (0.2: D ~ 0.2, where a neo-Hookean cell's stress departs from Hooke's by ~D / 2
+= 10 %) gives a ``DeformationWarning``, once per body; past ``LINEAR_LIMIT`` (0.5), or where the
+deformed surface folds (an element's normal at one of its nodes turned more than 90 degrees
+from the reference one; the traction solve then stalls), the run stops with a
+``DeformationError`` that names the body and the way out (a sphere in unbounded shear folds at
+Ca ~ 1, after max |u| / a passes 0.9). A step that turns the cell by more than
+``ROTATION_PER_STEP`` (0.1 rad) warns: the target lags the material by about half the turn (the
+tilt from 45 degrees, 3 Ca / 4, is then off by its own size at dt ~ tau). A contact patch narrower
+than the cell's elements warns once: the mesh, not Hertz, sets the flattening there.
 """
 
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 
@@ -74,11 +88,23 @@ from ..forces.interaction import Interaction
 from ..hydro.traction import solve_traction
 from ..surfaces.body import rotation_matrix
 from ..surfaces.gaps import WALL
+from ..surfaces import quad9
 from ..surfaces.mesh import Mesh
 from .interior import InteriorElasticity, check_material
-from .shape import nodal_displacement, shear_plane_deformation
+from .shape import nodal_displacement, nodal_weights, shear_plane_deformation
 
 CENTRE_NODE = 8  # of a QUAD9 element (surfaces/quad9.py): its collocation point
+LINEAR_RANGE = 0.2  # max |u| / a past which the linear material is inaccurate (module docstring)
+LINEAR_LIMIT = 0.5  # max |u| / a past which a run stops
+ROTATION_PER_STEP = 0.1  # rad: a larger turn in one step lags the target by about half of it
+
+
+class DeformationWarning(UserWarning):
+    """A deformable cell outside the range where its model is accurate (it still runs)."""
+
+
+class DeformationError(RuntimeError):
+    """A deformable cell's displacement outside what linear elasticity on its mesh can mean."""
 
 
 class Deformation(Interaction):
@@ -110,7 +136,8 @@ class Deformation(Interaction):
         self.shear_modulus, self.poisson_ratio = list(shear_modulus), list(poisson_ratio)
         self.max_nodes = max(len(m.nodes) for m in self.meshes)
         self.device = "cpu"
-        self.elastic = {}
+        self.elastic, self.weights, self.normals, self.element_size = {}, {}, {}, {}
+        self._warned = set()  # (body, kind) already reported
 
     def relaxation_time(self, i: int) -> float:
         """tau = 3 mu / (2 G) (s) of body i (module docstring); 0 for the quasi-static model."""
@@ -122,6 +149,9 @@ class Deformation(Interaction):
         self.elastic = {i: InteriorElasticity(self.meshes[i], self.shear_modulus[i], self.poisson_ratio[i], device,
                                               quadrature_order=self.quadrature_order)
                         for i in np.flatnonzero(self.deformable)}
+        self.weights = {i: nodal_weights(self.meshes[i]) for i in self.elastic}
+        self.normals = {i: self._node_normals(self.meshes[i].nodes, i) for i in self.elastic}
+        self.element_size = {i: float(np.sqrt(self.meshes[i].element_areas().mean())) for i in self.elastic}
 
     def state_columns(self):
         n = len(self.meshes)
@@ -166,9 +196,44 @@ class Deformation(Interaction):
             tau = self.relaxation_time(i)
             keep = np.exp(-dt / tau) if tau > 0 else 0.0
             displacement[i] = target[i] + (part["node_displacement"][i] - target[i]) * keep
+            self._check(i, displacement[i], start_bodies[i].orientation, end_orientations[i], dt)
         return {"node_displacement": displacement, "target_displacement": target, "steps_since_solve": age + 1.0,
                 "node_velocity": (displacement - part["node_displacement"]) / dt,
                 "orientation": np.array(end_orientations, dtype=float)}
+
+    def _node_normals(self, nodes, i):
+        """Unit normals (E, 9, 3) at the nine nodes of every element of body i's surface through
+        ``nodes`` (body frame)."""
+        return quad9.unit_normals(nodes[self.meshes[i].elements], *quad9.REFERENCE_NODES.T)
+
+    def _warn_once(self, i, kind, message):
+        if (i, kind) not in self._warned:
+            self._warned.add((i, kind))
+            warnings.warn(message, DeformationWarning, stacklevel=4)
+
+    def _check(self, i, displacement, start_orientation, end_orientation, dt):
+        """Stop or warn where the model fails (module docstring: where it fails)."""
+        nodes = self.meshes[i].nodes
+        amplitude = np.linalg.norm(displacement[:len(nodes)], axis=1).max() / self.meshes[i].equivalent_radius()
+        turn = np.einsum("eqi,eqi->eq", self._node_normals(nodes + displacement[:len(nodes)], i), self.normals[i])
+        advice = (f"lower the viscous number mu gdot / G (G = {self.shear_modulus[i]:g} Pa) or the loads on the"
+                  " cell, or model it as rigid")
+        if turn.min() <= 0.0:
+            raise DeformationError(f"body {i}: the deformed surface folds (an element's normal turned"
+                                   f" {np.degrees(np.arccos(max(turn.min(), -1.0))):.0f} degrees from the reference"
+                                   f" one, max |u| / a = {amplitude:.2f}): {advice}")
+        if amplitude > LINEAR_LIMIT:
+            raise DeformationError(f"body {i}: its displacement reached {amplitude:.2f} of its radius, beyond"
+                                   f" {LINEAR_LIMIT} where linear elasticity means nothing: {advice}")
+        if amplitude > LINEAR_RANGE:
+            self._warn_once(i, "range", f"body {i}: displacement {amplitude:.2f} of its radius, past {LINEAR_RANGE}:"
+                            " the linear material departs from a neo-Hookean one by ~10 % and more here")
+        q = np.asarray(start_orientation, dtype=float) @ np.asarray(end_orientation, dtype=float)
+        angle = 2.0 * np.arccos(min(abs(q), 1.0))
+        if angle > ROTATION_PER_STEP:
+            self._warn_once(i, "turn", f"body {i} turned {angle:.2g} rad in a step of {dt:.3g} s: its shape lags"
+                            f" the material by about half that; a step below {ROTATION_PER_STEP} rad of turn"
+                            " (time.dt_max) keeps the inclination accurate")
 
     def contact_radius(self, body: int, other: int, force: float) -> float:
         """Hertz radius a = (3 F R* / 4 E*)^(1/3) (m; thesis eq. 4.9) of a contact load F (N)
@@ -187,7 +252,11 @@ class Deformation(Interaction):
         for body, other, point, load in point_loads:  # these act on the surface, not as body loads
             force[body] -= load
             torque[body] -= np.cross(point - start_bodies[body].position, load)
-            spread.append((body, point, load, self.contact_radius(body, other, np.linalg.norm(load))))
+            radius = self.contact_radius(body, other, np.linalg.norm(load))
+            spread.append((body, point, load, radius))
+            if self.deformable[body] and radius < self.element_size[body]:
+                self._warn_once(body, "patch", f"body {body}: its contact patch (Hertz radius {radius:.2g} m) is"
+                                " narrower than its elements: the mesh, not Hertz, sets the contact's flattening")
         traction = solve_traction(start_bodies, self.flow.shear_rate, self.flow.viscosity, self.flow.wall,
                                   force, torque, self.device, point_loads=spread,
                                   quadrature_order=self.quadrature_order, contact_refinement=self.contact_refinement)
@@ -195,7 +264,7 @@ class Deformation(Interaction):
         for i, elastic in self.elastic.items():
             # each element's traction, in the body frame of the state it was solved at
             local = elastic.solve(traction.on_mesh(i) @ start_bodies[i].rotation())
-            target[i, :len(self.meshes[i].nodes)] = nodal_displacement(self.meshes[i], local.displacement)
+            target[i, :len(self.meshes[i].nodes)] = nodal_displacement(self.meshes[i], local.displacement, self.weights[i])
         return target
 
     def derived_columns(self):

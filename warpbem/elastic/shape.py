@@ -22,25 +22,38 @@ import numpy as np
 from ..surfaces.mesh import Mesh
 
 
-def nodal_displacement(mesh: Mesh, element_displacement) -> np.ndarray:
-    """(n_nodes, 3), m: each node's value of the linear fit to the element centres around it
-    (module docstring)."""
-    u = np.asarray(element_displacement, dtype=float)
-    if u.shape != (mesh.n_elements, 3):
-        raise ValueError(f"element_displacement must have shape ({mesh.n_elements}, 3), got {u.shape}")
+def nodal_weights(mesh: Mesh):
+    """The (n_nodes, n_elements) sparse matrix taking element values to each node's value of
+    the linear fit to the element centres around it (module docstring): the first row of the
+    fit's pseudo-inverse, per node. It depends on the reference mesh only, so a deforming cell
+    builds it once."""
+    from scipy.sparse import csr_matrix
+
     centres = mesh.element_nodes()[:, 8]
     scale = mesh.size()
     holders = [[] for _ in mesh.nodes]
     for e, element in enumerate(mesh.elements):
         for node in element:
             holders[node].append(e)
-    out = np.empty((len(mesh.nodes), 3))
+    rows, columns, values = [], [], []
     for node, own in enumerate(holders):
         ring = np.unique(np.concatenate([[e for n in mesh.elements[o] for e in holders[n]] for o in own]))
         offset = (centres[ring] - mesh.nodes[node]) / scale
         design = np.column_stack([np.ones(len(ring)), offset])
-        out[node] = np.linalg.lstsq(design, u[ring], rcond=None)[0][0]
-    return out
+        rows.append(np.full(len(ring), node))
+        columns.append(ring)
+        values.append(np.linalg.pinv(design)[0])
+    return csr_matrix((np.concatenate(values), (np.concatenate(rows), np.concatenate(columns))),
+                      shape=(len(mesh.nodes), mesh.n_elements))
+
+
+def nodal_displacement(mesh: Mesh, element_displacement, weights=None) -> np.ndarray:
+    """(n_nodes, 3), m: each node's value of the linear fit to the element centres around it
+    (module docstring); ``weights`` the mesh's ``nodal_weights``, built here if not given."""
+    u = np.asarray(element_displacement, dtype=float)
+    if u.shape != (mesh.n_elements, 3):
+        raise ValueError(f"element_displacement must have shape ({mesh.n_elements}, 3), got {u.shape}")
+    return (nodal_weights(mesh) if weights is None else weights) @ u
 
 
 def deformed(mesh: Mesh, element_displacement) -> Mesh:

@@ -65,8 +65,13 @@ def surface_quadrature(element_nodes: np.ndarray, order: int):
     return positions, np.cross(x_s, x_t) * weights[None, :, None]
 
 
+def unit_normals(element_nodes: np.ndarray, s, t) -> np.ndarray:
+    """Unit outward normals (E, Q, 3) at the points (s, t) (each of shape (Q,)) of every element."""
+    _, ns, nt = shape_functions(np.asarray(s, dtype=float), np.asarray(t, dtype=float))
+    normal = np.cross(np.einsum("qa,eai->eqi", ns, element_nodes), np.einsum("qa,eai->eqi", nt, element_nodes))
+    return normal / np.linalg.norm(normal, axis=-1, keepdims=True)
+
+
 def centre_normals(element_nodes: np.ndarray) -> np.ndarray:
     """Unit outward normals (E, 3) at the element centres (s = t = 0), the collocation points."""
-    _, ns, nt = shape_functions(np.zeros(1), np.zeros(1))
-    normal = np.cross(np.einsum("qa,eai->eqi", ns, element_nodes), np.einsum("qa,eai->eqi", nt, element_nodes))[:, 0]
-    return normal / np.linalg.norm(normal, axis=1, keepdims=True)
+    return unit_normals(element_nodes, np.zeros(1), np.zeros(1))[:, 0]
