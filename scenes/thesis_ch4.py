@@ -4,6 +4,7 @@ files, for scenes/README.md:
     warpbem sweep scenes/fig4_04_06_stiff_bonds.toml --output-dir results/fig4_04_06_stiff_bonds
     warpbem sweep scenes/fig4_09_11_soft_bonds.toml --output-dir results/fig4_09_11_soft_bonds
     warpbem sweep scenes/fig4_12_14_bond_cap.toml --output-dir results/fig4_12_14_bond_cap
+    warpbem sweep scenes/fig4_07_11_compliant_rolling.toml --output-dir results/compliant_rolling
     warpbem run scenes/rolling_cells.toml --output results/rolling_cells.h5
     warpbem sweep scenes/state_diagram.toml --vary adhesion.off_rate=1.0 \
         --vary adhesion.reactive_compliance=0.6e-10 --vary adhesion.seed=2,3,4,5 \
@@ -17,7 +18,10 @@ Table 1 (results/thesis_ch4.csv), solitary rolling, figs. 4.4-4.14. The thesis r
 (figs. 4.4-4.6) and 10000 steps (figs. 4.12-4.14) of 1e-8 - 1e-6 s, so it reports at most 2 and
 10 ms of rolling; each run here gives the velocity at those times, when the cell came to rest
 (velocity below 1 % of the free one), the distance it rolled, its bonds at the end, and its
-Hertz contact area (mean over the run and at the end).
+Hertz contact area (mean over the run and at the end); for deformable cells (the
+compliant_rolling runs) also the largest node displacement of the run. The chart
+docs/figures/compliant_rolling.png sets the deformable cells' velocities beside the
+rigid-with-Hertz cells' of the same parameters.
 
 Table 3 (results/rolling_cells.csv), several rolling cells against the lone one: each cell's
 velocity before any bond (its hydrodynamic velocity, where the neighbours act first) and its mean
@@ -47,7 +51,7 @@ from warpbem.app.io import open_result
 
 ROOT = Path(__file__).resolve().parent.parent
 ROUGHNESS = 175e-9
-ROLLING = ["fig4_04_06_stiff_bonds", "fig4_09_11_soft_bonds", "fig4_12_14_bond_cap"]
+ROLLING = ["fig4_04_06_stiff_bonds", "fig4_09_11_soft_bonds", "compliant_rolling", "fig4_12_14_bond_cap"]
 
 
 def rolling(path: Path, label: str) -> list[dict]:
@@ -56,12 +60,48 @@ def rolling(path: Path, label: str) -> list[dict]:
         t, u = f["time"][:], f["velocity"][:, 0, 0]
         x = f["position"][:, 0, 0]
         bonds, area = f["bond_count"][:, 0], f["contact_area"][:, 0]
+        shaped = "deformation_node_displacement" in f
+        displacement = np.abs(f["deformation_node_displacement"][:]).max() if shaped else float("nan")
     rest = np.flatnonzero(u < 0.01 * u[0])
-    return [dict(run=label, free_um_s=u[0] * 1e6,
-                 u_2ms_um_s=np.interp(2e-3, t, u) * 1e6, u_10ms_um_s=np.interp(10e-3, t, u) * 1e6,
+    return [dict(run=label, free_um_s=u[0] * 1e6, **{f"u_{ms}ms_um_s": np.interp(ms * 1e-3, t, u) * 1e6
+                                                   for ms in (1, 2, 5, 7, 10)},
                  u_end_um_s=u[-1] * 1e6, rest_ms=t[rest[0]] * 1e3 if len(rest) else float("nan"),
                  rolled_um=(x[-1] - x[0]) * 1e6, bonds_end=int(bonds[-1]), bonds_max=int(bonds.max()),
-                 area_mean_um2=np.mean(area) * 1e12, area_end_um2=area[-1] * 1e12, t_end_ms=t[-1] * 1e3)]
+                 area_mean_um2=np.mean(area) * 1e12, area_end_um2=area[-1] * 1e12, t_end_ms=t[-1] * 1e3,
+                 largest_displacement_nm=displacement * 1e9)]
+
+
+def compliant_rolling_chart(path: Path) -> Path | None:
+    """U(t) of the deformable cells (results/compliant_rolling) beside the rigid-with-Hertz
+    cells of the same parameters (results/fig4_09_11_soft_bonds), point by point."""
+    from warpbem.app.plotting import _pyplot
+
+    pairs = [(ROOT / "results" / "fig4_09_11_soft_bonds" / p.name, p)
+             for p in sorted((ROOT / "results" / "compliant_rolling").glob("point*.h5"))]
+    if not pairs:
+        return None
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for rigid, shaped in pairs:
+        with open_result(shaped) as f:
+            scene = json.loads(f.attrs["scene"])
+            t, u = f["time"][:], f["velocity"][:, 0, 0]
+        body = scene["bodies"][0]
+        label = f"a = {body['mesh']['radius'] * 1e6:g} um, G = {body['shear_modulus'] / 1e3:g} kPa"
+        line, = ax.plot(t * 1e3, u * 1e6, lw=2, label=f"{label}: deformable")
+        if rigid.exists():
+            with open_result(rigid) as f:
+                t, u = f["time"][:], f["velocity"][:, 0, 0]
+            keep = t <= 0.0125  # the deformable runs' 12 ms
+            ax.plot(t[keep] * 1e3, u[keep] * 1e6, "--", color=line.get_color(), lw=1, label=f"{label}: rigid, Hertz patch")
+    ax.set(xlabel="time [ms]", ylabel="rolling velocity U [um/s]",
+           title="soft bonds (0.5 dyn/cm): deformable cells against rigid cells with a Hertz patch")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
 
 
 def cells(path: Path, label: str) -> list[dict]:
@@ -189,6 +229,7 @@ def write(rows: list[dict], name: str):
 
 def main():
     write([row for name in ROLLING for row in sweep(name, rolling)], "thesis_ch4.csv")
+    print("chart:", compliant_rolling_chart(ROOT / "docs" / "figures" / "compliant_rolling.png"))
     single = ROOT / "results" / "free_meets_rolling.h5"
     write(several_rolling(), "rolling_cells.csv")
     trio = ROOT / "results" / "rolling_cells.h5"

@@ -239,18 +239,20 @@ def test_adhesion_states_follow_the_documented_rule():
 
 
 # thesis ch. 4.3 (Table 4.1 and the figure captions): scene, spring constant (N/m), cases as
-# (shear modulus Pa or None for rigid, radius m), cap, compression options
+# (shear modulus Pa or None for rigid, radius m), cap, compression options, cells deformable
 THESIS_CH4 = [
-    ("fig4_04_06_stiff_bonds", 0.1, {(508.0, 5e-6), (1000.0, 5e-6), (None, 5e-6)}, 200, {False}),
-    ("fig4_09_11_soft_bonds", 5e-4, {(4e3, 5e-6), (1e4, 5e-6), (4e3, 4e-6)}, 200, {False}),
-    ("fig4_12_14_bond_cap", 5e-4, {(8e3, 3e-6)}, 40, {False, True}),
+    ("fig4_04_06_stiff_bonds", 0.1, {(508.0, 5e-6), (1000.0, 5e-6), (None, 5e-6)}, 200, {False}, False),
+    ("fig4_09_11_soft_bonds", 5e-4, {(4e3, 5e-6), (1e4, 5e-6), (4e3, 4e-6)}, 200, {False}, False),
+    ("fig4_07_11_compliant_rolling", 5e-4, {(4e3, 5e-6), (1e4, 5e-6), (4e3, 4e-6)}, 200, {False}, True),
+    ("fig4_12_14_bond_cap", 5e-4, {(8e3, 3e-6)}, 40, {False, True}, False),
 ]
 
 
-@pytest.mark.parametrize("name, sigma, cells, cap, compression", THESIS_CH4)
-def test_thesis_ch4_scenes_use_table_4_1(name, sigma, cells, cap, compression):
+@pytest.mark.parametrize("name, sigma, cells, cap, compression, deformable", THESIS_CH4)
+def test_thesis_ch4_scenes_use_table_4_1(name, sigma, cells, cap, compression, deformable):
     seen, options = set(), set()
     for s in sweep_scenes(name):
+        assert any(x.name == "deformation" for x in s.model.interactions) == deformable
         bonds = s.model.interaction("bond")
         assert (bonds.spring_constant, bonds.equilibrium_length, bonds.off_rate, bonds.reactive_compliance,
                 bonds.on_rate, bonds.receptor_density, bonds.roughness) == (sigma, 30e-9, 2.4, 0.39e-10, 365.0,

@@ -86,6 +86,25 @@ def test_generators_reject_bad_sizes(kwargs, message):
         mesh.spheroid(1.0, 0.0)
 
 
+def test_a_pole_graded_sphere_crowds_its_elements_at_the_south_pole_and_stays_a_closed_sphere():
+    """Stereographic scaling by 1/g (a conformal map): the nodes stay on the sphere, the mesh
+    conforms (check passes: every edge shared by two elements), the area still converges, and
+    the element at the south pole is ~g times smaller than at the north pole, g^2 in area."""
+    uniform, graded = mesh.sphere(1.0, 8), mesh.sphere(1.0, 8, pole_grading=4.0)
+    assert graded.n_elements == uniform.n_elements
+    np.testing.assert_allclose(np.linalg.norm(graded.nodes, axis=1), 1.0, rtol=1e-12)
+    graded.check()
+    assert graded.area() == pytest.approx(4 * np.pi, rel=2e-3)
+    centres, areas = graded.element_nodes()[:, 8], graded.element_areas()
+    south, north = areas[np.argmin(centres[:, 2])], areas[np.argmax(centres[:, 2])]
+    assert 4.0**2 < north / south < 4.0**4  # the pole elements: 1/g and g times the uniform size
+    assert areas[np.argmin(centres[:, 2])] == pytest.approx(
+        uniform.element_areas()[np.argmin(uniform.element_nodes()[:, 8, 2])] / 16.0, rel=0.05)
+    for bad in (0.5, np.nan, True):
+        with pytest.raises(ValueError, match="pole_grading"):
+            mesh.sphere(1.0, 4, pole_grading=bad)
+
+
 def test_mesh_rejects_bad_arrays():
     with pytest.raises(mesh.MeshError, match="shape"):
         mesh.Mesh(np.zeros((4, 2)), np.zeros((1, 9), int))

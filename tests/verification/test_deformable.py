@@ -184,7 +184,6 @@ def test_a_deformable_run_is_written_resumed_and_played(tmp_path):
     ("bodies.0.shear_modulus=-1.0", r"bodies.0.shear_modulus: -1 is outside"),
     ("bodies.0.fixed=true", r"bodies.0.deformable: a deformable body must be free"),
     ("bodies.0.poisson_ratio=0.5", r"bodies.0.poisson_ratio: 0.5 is outside the allowed range"),
-    ("physics.adhesion=true flow.wall=true", r"deformable cells are not coupled to adhesion yet"),
     ("deformation.update_interval=0", r"deformation.update_interval: 0 is outside the allowed range"),
     ("deformation.update_interval=1.5", r"deformation.update_interval: expected an integer"),
     ("deformation.relaxation=1", r"deformation.relaxation: expected true or false"),

@@ -45,7 +45,8 @@ viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
                                 (free bodies: linear elasticity with shear_modulus, see
                                 [deformation]), ligands = false (fixed
                                 bodies: free cells can bind to them), and a mesh:
-    [bodies.mesh]               shape = "sphere" (radius, subdivisions) | "spheroid" (radius,
+    [bodies.mesh]               shape = "sphere" (radius, subdivisions, pole_grading: elements
+                                crowded towards -z, 1 = uniform) | "spheroid" (radius,
                                 aspect_ratio, subdivisions) | "file" (path, relative to the scene)
 
 ``--set key=value`` overrides use the dotted names, e.g. ``flow.shear_rate=80`` or
@@ -177,10 +178,14 @@ class Scene:
 
 
 def _mesh(where, spec, folder: Path):
-    shape = _table(where, spec, {"shape", "radius", "subdivisions", "aspect_ratio", "path"}, ("shape",))["shape"]
+    shape = _table(where, spec, {"shape", "radius", "subdivisions", "aspect_ratio", "path", "pole_grading"},
+                   ("shape",))["shape"]
     k = _number(f"{where}.subdivisions", spec.get("subdivisions", 4), 1, 32, integer=True)
+    if "pole_grading" in spec and shape != "sphere":
+        raise SceneError(f"{where}.pole_grading: only a sphere is graded (shape = 'sphere')")
     if shape == "sphere":
-        return meshes.sphere(_number(f"{where}.radius", spec.get("radius"), 0, 1e-2, low_open=True), k)
+        return meshes.sphere(_number(f"{where}.radius", spec.get("radius"), 0, 1e-2, low_open=True), k,
+                             pole_grading=_number(f"{where}.pole_grading", spec.get("pole_grading", 1.0), 1, 100))
     if shape == "spheroid":
         return meshes.spheroid(_number(f"{where}.radius", spec.get("radius"), 0, 1e-2, low_open=True),
                                _number(f"{where}.aspect_ratio", spec.get("aspect_ratio"), 0.05, 20), k)
@@ -272,9 +277,6 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
     if _bool("physics.repulsion", physics.get("repulsion", False)):
         interactions.append(repulsion_model)
     adhesive = _bool("physics.adhesion", physics.get("adhesion", False))
-    if adhesive and any(b.deformable for b in bodies):
-        raise SceneError("bodies.N.deformable: deformable cells are not coupled to adhesion yet; set"
-                         " physics.adhesion = false or deformable = false")
     if adhesive:
         interactions.append(_adhesion(adhesion, bodies, repulsion_model, dt_min,
                                       _bool("flow.wall", flow.get("wall", True))))

@@ -152,7 +152,9 @@ class Simulator:
         explicit = {x.name: loads for x in model.interactions
                     if (loads := x.explicit_loads(bodies, contacts)) is not None}
         total = sum(explicit.values(), Loads.zero(model.n_bodies))
-        stiff = any(x.reuses_mobility(state.parts[x.name]) for x in model.interactions if x.name in state.parts)
+        stiff = (any(x.reuses_mobility(state.parts[x.name]) for x in model.interactions if x.name in state.parts)
+                 and all(x.keeps_shape(state.parts[x.name], self.hydro.tolerance) for x in model.interactions
+                         if x.shapes_bodies and x.name in state.parts))
         background, snapshot = self.hydro.background(bodies, total, stiff)
         hydro, implicit = self._implicit(state, bodies, contacts, background, snapshot, dt_plan)
         self._latest = Evaluation(model, state, contacts, dt_plan, explicit, hydro, implicit)

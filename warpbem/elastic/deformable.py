@@ -37,14 +37,30 @@ tau = 0.4 us for G = 4 kPa).
 
 Surface motion (``surface_velocity = True``, the default). The flow sees the deformed surface
 moving as the material does: on top of the rigid motion (U, Omega) each element's surface moves
-with w = R du/dt, du/dt the displacement's rate over the last step (body frame), the slip of the
-mobility solve (``Body.surface_velocity``, its non-rigid part). A tank-treading cell's surface
+with w = R du/dt (body frame du/dt), the slip of the mobility solve (``Body.surface_velocity``, its non-rigid part). A tank-treading cell's surface
 then slides along its steady shape instead of turning with it as a rigid body would; this is
 what lifts a deformed cell off the wall (the drift of drops, capsules and vesicles in wall shear:
 Smart & Leighton 1991; Abkarian, Lartigue & Viallat 2002). ``surface_velocity = False`` solves
 the deformed shape as rigid at the instant (it then drifts towards the wall, a finding of
-scenes/README.md). The rate lags by a step (first order in dt); the traction of the target is
-still the rigid shape's, the surface motion's own traction being what tau models.
+scenes/README.md). du/dt is the relaxation's rate at the state, (u* - u) / tau towards the
+target of the step that led to it (which a cell with tau << dt has reached: its surface is then
+at rest on its shape, where the step's mean rate would have put a pulse of (u_(n+1) - u_n) / dt
+into the flow, 1.9 % of a stiff rolling cell's velocity in its first step), and the mean rate
+over the step in the quasi-static model; it lags the traction by a step (first order in dt).
+The traction of the target is still the rigid shape's, the surface motion's own traction being
+what tau models.
+
+Adhesion (``forces/adhesion.py``). A deformable cell's receptors ride on its surface: each tip
+moves with the displacement of the surface point under it (the microvillus keeps its reference
+direction), and each bond's force acts at its tip (``ImplicitCoordinates.points``), spread like
+the contact loads. Below the elements, the Hertz patch of the bonds' normal force (thesis eq.
+4.9) still flattens the tips inside it (Johnson's surface displacement, as on the rigid cells
+with a Hertz patch): the mesh carries the cell's shape on its own scale (the fluid's strain, the
+overall response to the contact and bond loads), Hertz the contact below it, and the two add
+(the mesh's own flattening under a contact, a few nm at k = 4, against Hertz's tens of nm, is
+the overlap). Mobility snapshots (the adhesion's reuse of the flow solves on a lattice of
+heights) serve a state while max |u| stays within their tolerance (``keeps_shape``; 2 nm by
+default, the lattice's own spacing); a cell that deforms more is solved at every state.
 
 ``update_interval`` = m > 1 re-solves the target every m-th step only and relaxes towards the
 kept one (body frame) in between (model no more than the scene needs: a slow, stiff cell).
@@ -74,7 +90,8 @@ from the reference one; the traction solve then stalls), the run stops with a
 Ca ~ 1, after max |u| / a passes 0.9). A step that turns the cell by more than
 ``ROTATION_PER_STEP`` (0.1 rad) warns: the target lags the material by about half the turn (the
 tilt from 45 degrees, 3 Ca / 4, is then off by its own size at dt ~ tau). A contact patch narrower
-than the cell's elements warns once: the mesh, not Hertz, sets the flattening there.
+than the cell's elements warns once (if its Hertz approach a^2 / R passes 1 nm): the mesh, not
+Hertz, sets the flattening there.
 """
 
 from __future__ import annotations
@@ -96,6 +113,7 @@ from .shape import nodal_displacement, nodal_weights, shear_plane_deformation
 CENTRE_NODE = 8  # of a QUAD9 element (surfaces/quad9.py): its collocation point
 LINEAR_RANGE = 0.2  # max |u| / a past which the linear material is inaccurate (module docstring)
 LINEAR_LIMIT = 0.5  # max |u| / a past which a run stops
+UNRESOLVED_APPROACH = 1e-9  # m: a contact patch narrower than the elements warns past this Hertz approach
 ROTATION_PER_STEP = 0.1  # rad: a larger turn in one step lags the target by about half of it
 
 
@@ -158,7 +176,7 @@ class Deformation(Interaction):
         return {"node_displacement": ("m (body frame; rows past a mesh's nodes are zero)", (n, self.max_nodes, 3)),
                 "target_displacement": ("m (body frame: the elastic balance of the last traction solved)",
                                         (n, self.max_nodes, 3)),
-                "node_velocity": ("m/s (body frame: the displacement's rate over the last step)",
+                "node_velocity": ("m/s (body frame: the displacement's rate at the state)",
                                   (n, self.max_nodes, 3)),
                 "steps_since_solve": ("1 (steps since the target was solved; per body, all alike)", (n,)),
                 "orientation": ("1 (quaternion w, x, y, z of the shape measured)", (n, 4))}
@@ -169,6 +187,11 @@ class Deformation(Interaction):
         return {"node_displacement": zeros, "target_displacement": zeros.copy(), "node_velocity": zeros.copy(),
                 "steps_since_solve": np.full(len(self.meshes), float(self.update_interval)),
                 "orientation": np.array([b.orientation for b in bodies])}
+
+    def keeps_shape(self, part, tolerance):
+        """max |u| <= tolerance: the snapshots of the reference shapes then serve the state, the
+        surface's slip over a step moving it by no more than that (module docstring)."""
+        return bool(np.abs(part["node_displacement"]).max() <= tolerance)
 
     def body_meshes(self, part, meshes):
         out = list(meshes)
@@ -191,14 +214,16 @@ class Deformation(Interaction):
         target, age = part["target_displacement"], part["steps_since_solve"]
         if age[0] >= self.update_interval:
             target, age = self._target(start_bodies, start_loads, point_loads), np.zeros_like(age)
-        displacement = np.zeros_like(part["node_displacement"])
+        displacement, rate = np.zeros_like(part["node_displacement"]), np.zeros_like(part["node_displacement"])
         for i in self.elastic:
             tau = self.relaxation_time(i)
             keep = np.exp(-dt / tau) if tau > 0 else 0.0
             displacement[i] = target[i] + (part["node_displacement"][i] - target[i]) * keep
+            # the rate at the end state (module docstring: surface motion)
+            rate[i] = (target[i] - displacement[i]) / tau if tau > 0 else (displacement[i] - part["node_displacement"][i]) / dt
             self._check(i, displacement[i], start_bodies[i].orientation, end_orientations[i], dt)
         return {"node_displacement": displacement, "target_displacement": target, "steps_since_solve": age + 1.0,
-                "node_velocity": (displacement - part["node_displacement"]) / dt,
+                "node_velocity": rate,
                 "orientation": np.array(end_orientations, dtype=float)}
 
     def _node_normals(self, nodes, i):
@@ -254,7 +279,9 @@ class Deformation(Interaction):
             torque[body] -= np.cross(point - start_bodies[body].position, load)
             radius = self.contact_radius(body, other, np.linalg.norm(load))
             spread.append((body, point, load, radius))
-            if self.deformable[body] and radius < self.element_size[body]:
+            # a patch the elements miss, whose Hertz approach a^2 / R (thesis eq. 4.9) matters
+            if (self.deformable[body] and radius < self.element_size[body]
+                    and radius**2 / self.meshes[body].equivalent_radius() > UNRESOLVED_APPROACH):
                 self._warn_once(body, "patch", f"body {body}: its contact patch (Hertz radius {radius:.2g} m) is"
                                 " narrower than its elements: the mesh, not Hertz, sets the contact's flattening")
         traction = solve_traction(start_bodies, self.flow.shear_rate, self.flow.viscosity, self.flow.wall,

@@ -82,13 +82,15 @@ def contact_traction(normal_force, contact_radius):
     return -3.0 * normal_force / (2.0 * np.pi * contact_radius**2)
 
 
-def sample_receptors(mesh, density: float, roughness: float, rng) -> np.ndarray:
+def sample_receptors(mesh, density: float, roughness: float, rng):
     """Tips (n, 3), body frame: points uniform by area on the QUAD9 surface (element by area,
-    then (s, t) by rejection on the surface Jacobian), moved ``roughness`` out along the normal."""
+    then (s, t) by rejection on the surface Jacobian), moved ``roughness`` out along the normal;
+    and where each sits, (element (n,), shape function values (n, 9)) of its surface point, so
+    that a deforming surface carries it."""
     nodes = mesh.element_nodes()
     areas = mesh.element_areas()
     count = int(round(density * areas.sum()))
-    tips = np.empty((0, 3))
+    tips, sites, weights = np.empty((0, 3)), np.empty(0, dtype=int), np.empty((0, 9))
     while len(tips) < count:
         n = 2 * (count - len(tips)) + 16
         element = rng.choice(len(areas), size=n, p=areas / areas.sum())
@@ -100,7 +102,8 @@ def sample_receptors(mesh, density: float, roughness: float, rng) -> np.ndarray:
         bound = 1.25 * areas[element] / 4.0  # above the element's largest Jacobian on these meshes
         keep = rng.uniform(0, 1, size=n) * bound < jacobian
         tips = np.concatenate([tips, (x + roughness * normal / jacobian[:, None])[keep]])
-    return tips[:count]
+        sites, weights = np.concatenate([sites, element[keep]]), np.concatenate([weights, values[keep]])
+    return tips[:count], sites[:count], weights[:count]
 
 
 class Adhesion(Interaction):
@@ -158,8 +161,13 @@ class Adhesion(Interaction):
         self.shear_modulus, self.poisson_ratio = modulus, ratio
         self.radius = np.array([m.equivalent_radius() for m in meshes])
         rng = np.random.default_rng(self.seed)
-        tips = [sample_receptors(meshes[b], self.receptor_density, self.roughness, rng) for b in self.cells]
+        sampled = [sample_receptors(meshes[b], self.receptor_density, self.roughness, rng) for b in self.cells]
+        tips = [t for t, _, _ in sampled]
         self.tips = np.concatenate(tips)
+        # the mesh nodes under each tip and their weights: a deformed cell carries its tips
+        self.tip_nodes = np.concatenate([meshes[b].elements[e] for b, (_, e, _) in zip(self.cells, sampled)])
+        self.tip_weights = np.concatenate([w for _, _, w in sampled])
+        self.meshes = list(meshes)
         self.receptor_body = np.concatenate([np.full(len(t), b) for t, b in zip(tips, self.cells)]).astype(np.int32)
         self.receptor_start = np.concatenate([[0], np.cumsum([len(t) for t in tips])]).astype(np.int32)
         self.n_bodies = n
@@ -211,6 +219,19 @@ class Adhesion(Interaction):
 
             self.contact = build_contact_kernels(wp.float64)
 
+    def tips_at(self, bodies) -> np.ndarray:
+        """The tips (R, 3, body frame) on the bodies' surfaces of a state: the reference tips
+        moved by the displacement of the surface under them, for cells whose mesh at the state
+        is a deformed one (``Deformation``; the microvillus keeps its reference direction)."""
+        tips = self.tips
+        for c, b in enumerate(self.cells):
+            if bodies[b].mesh is not self.meshes[b]:
+                rows = slice(self.receptor_start[c], self.receptor_start[c + 1])
+                shift = bodies[b].mesh.nodes - self.meshes[b].nodes
+                tips = tips.copy() if tips is self.tips else tips
+                tips[rows] += np.einsum("ra,rai->ri", self.tip_weights[rows], shift[self.tip_nodes[rows]])
+        return tips
+
     def _frame(self, bodies, contacts, part):
         """Device arrays of the configuration: positions, rotations, patch centres and radii."""
         if self.device is None:
@@ -219,7 +240,9 @@ class Adhesion(Interaction):
         centre = np.array([b.position for b in bodies])
         for b in self.cells:
             centre[b] = contacts.gap(int(b), WALL).point  # the foot of the closest point (x, y are used)
-        return dict(positions=wp.array(np.array([b.position for b in bodies]), dtype=k.vec3, device=self.device),
+        tips = self.tips_at(bodies)
+        return dict(tips=self._tips if tips is self.tips else wp.array(tips, dtype=k.vec3, device=self.device),
+                    positions=wp.array(np.array([b.position for b in bodies]), dtype=k.vec3, device=self.device),
                     rotations=wp.array(np.array([b.rotation() for b in bodies]), dtype=k.mat33, device=self.device),
                     patch_centre=wp.array(centre, dtype=k.vec3, device=self.device),
                     patch_radius=wp.array(part["contact_radius"], dtype=wp.float64, device=self.device),
@@ -244,7 +267,7 @@ class Adhesion(Interaction):
         wp, k = self.wp, self.k
         vector = wp.zeros(self.capacity, dtype=k.vec3, device=self.device)
         moment = wp.zeros(self.capacity, dtype=k.mat33, device=self.device)
-        self._launch(k.bond_geometry, self.capacity, [*table, self._tips, self._receptor_body, frame["positions"],
+        self._launch(k.bond_geometry, self.capacity, [*table, frame["tips"], self._receptor_body, frame["positions"],
                                                       frame["rotations"], vector, moment])
         return vector, moment
 
@@ -302,7 +325,8 @@ class Adhesion(Interaction):
         """Three coordinates per bond, the components of its vector x_m - x_o: their rates are
         linear in the cell's motion (dx/dt = U + Omega x arm), and the law of the length is exact
         however far the tip moves in a step (a rolling cell's tips move further than a bond is
-        long)."""
+        long). Their points are the tip on the cell and the anchor on a ligand-bearing cell,
+        where the bond's force deforms a deformable one."""
         rows = np.flatnonzero(part["receptor"] >= 0)
         if not len(rows):
             return None
@@ -310,9 +334,12 @@ class Adhesion(Interaction):
         body = self.receptor_body[part["receptor"][rows].astype(int)]
         m = 3 * len(rows)
         unit_force, unit_torque = np.zeros((m, self.n_bodies, 3)), np.zeros((m, self.n_bodies, 3))
+        points = np.full((m, self.n_bodies, 3), np.nan)
+        tips = part["anchor"][rows] + vector
         for i in range(3):
             unit_force[i::3][np.arange(len(rows)), body, i] = 1.0
             unit_torque[i::3][np.arange(len(rows)), body] = moment[:, :, i]  # arm x e_i
+            points[i::3][np.arange(len(rows)), body] = tips
         partner = part["partner"][rows].astype(int)
         on_cell = np.flatnonzero(partner >= 0)
         if len(on_cell):  # the reaction on the cell that carries the ligand, at the anchor
@@ -323,7 +350,8 @@ class Adhesion(Interaction):
                 e[i] = 1.0
                 unit_force[i::3][on_cell, partner[on_cell], i] = -1.0
                 unit_torque[i::3][on_cell, partner[on_cell]] = -np.cross(arm, e)
-        return ImplicitCoordinates(vector.ravel(), unit_force, unit_torque)
+                points[i::3][on_cell, partner[on_cell]] = anchors
+        return ImplicitCoordinates(vector.ravel(), unit_force, unit_torque, points)
 
     def law(self, s):
         """U = sigma (|x| - lambda)^2 / 2 of each bond vector x (only |x| > lambda when bonds
@@ -364,7 +392,7 @@ class Adhesion(Interaction):
         if len(self.ligand_bodies):
             rotations = np.array([b.rotation() for b in bodies])[self.receptor_body]
             tips = np.array([b.position for b in bodies])[self.receptor_body] + np.einsum("rij,rj->ri", rotations,
-                                                                                          self.tips)
+                                                                                          self.tips_at(bodies))
         for b in self.ligand_bodies:
             elements = bodies[b].world_nodes()[bodies[b].mesh.elements]
             centres, radii = bounding_spheres(elements)
@@ -441,7 +469,7 @@ class Adhesion(Interaction):
         lowering = wp.zeros(n_receptors, dtype=wp.float64, device=self.device)
         chosen = wp.zeros(n_receptors, dtype=int, device=self.device)
         self._launch(k.formation, n_receptors, [
-            bound, self._tips, self._receptor_body, frame["positions"], frame["rotations"], frame["patch_centre"],
+            bound, frame["tips"], self._receptor_body, frame["positions"], frame["rotations"], frame["patch_centre"],
             frame["patch_radius"], frame["curvature"], self.equilibrium_length, self.ligand_layer,
             self.spring_constant / self.thermal_energy, self.reactive_compliance, self.effective_on_rate, dt,
             self.seed, 2 * draw + 1, wp.array(cell_anchor, dtype=k.vec3, device=self.device),

@@ -146,6 +146,11 @@ class Interaction:
         (``dynamics/hydrodynamics.py``): the bonds of a rolling cell, not a free-stream pass."""
         return False
 
+    def keeps_shape(self, part: dict, tolerance: float) -> bool:
+        """Whether the bodies this interaction shapes are within ``tolerance`` (m) of their
+        reference shapes at the state of ``part``, so that mobility snapshots serve it."""
+        return True
+
     def state_columns(self) -> dict:
         return {}
 

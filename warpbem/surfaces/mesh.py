@@ -139,18 +139,27 @@ def _subdivisions(value):
     return int(value)
 
 
-def sphere(radius: float, subdivisions: int = 4, projection: str = "equiangular") -> Mesh:
+def sphere(radius: float, subdivisions: int = 4, projection: str = "equiangular", pole_grading: float = 1.0) -> Mesh:
     """Cube-projected sphere (thesis ch. 2.3, fig. 2.4a): 6 k^2 QUAD9 elements.
 
     Each cube face is split into k x k elements whose 9 nodes are projected radially onto the
     sphere; k = 4 gives the seed's 96 elements. ``projection="equiangular"`` spaces the nodes
     evenly in angle (u -> tan(pi u / 4)), which makes the elements more uniform than the plain
     ``"gnomonic"`` projection of an evenly split cube.
+
+    ``pole_grading`` g > 1 crowds the elements towards the south pole (-z, where a cell meets
+    the wall): the nodes' stereographic coordinates from the north pole are divided by g, a
+    conformal map (the elements keep their shapes), so the elements at the south pole are g
+    times smaller and those at the north pole g times larger, with the count unchanged and the
+    mesh conforming. It resolves a contact patch narrower than the uniform elements (a Hertz
+    patch of 0.3-1 um on a 5 um cell) at no extra unknowns.
     """
     radius = _positive_number("radius", radius)
     k = _subdivisions(subdivisions)
     if projection not in ("equiangular", "gnomonic"):
         raise ValueError(f"projection must be 'equiangular' or 'gnomonic', got {projection!r}")
+    if isinstance(pole_grading, bool) or not (np.isfinite(pole_grading) and 1.0 <= pole_grading <= 100.0):
+        raise ValueError(f"pole_grading must be a number from 1 to 100, got {pole_grading!r}")
     grid = np.linspace(-1.0, 1.0, 2 * k + 1)
     if projection == "equiangular":
         grid = np.tan(0.25 * np.pi * grid)
@@ -167,12 +176,25 @@ def sphere(radius: float, subdivisions: int = 4, projection: str = "equiangular"
         for i in range(k):
             for j in range(k):
                 elements.append([base + (2 * i + di) * n + (2 * j + dj) for di, dj in ref])
-    points = np.concatenate(points) * radius
+    points = _graded_towards_south_pole(np.concatenate(points), pole_grading) * radius
     # merge the nodes that adjacent faces share
     _, first, inverse = np.unique(
         np.round(points / radius, 12), axis=0, return_index=True, return_inverse=True
     )
     return Mesh(points[first], np.asarray(inverse).ravel()[np.array(elements)])
+
+
+def _graded_towards_south_pole(points: np.ndarray, grading: float) -> np.ndarray:
+    """Unit-sphere points moved by the conformal map zeta -> zeta / grading of their
+    stereographic coordinates zeta = (x, y) / (1 - z) (from the north pole, which stays)."""
+    if grading == 1.0:
+        return points
+    north = points[:, 2] > 1.0 - 1e-12
+    zeta = points[:, :2] / np.where(north, 1.0, 1.0 - points[:, 2])[:, None] / grading
+    r2 = np.sum(zeta**2, axis=1)
+    out = np.column_stack([2.0 * zeta / (1.0 + r2)[:, None], (r2 - 1.0) / (r2 + 1.0)])
+    out[north] = points[north]
+    return out
 
 
 def spheroid(radius: float, aspect_ratio: float, subdivisions: int = 4) -> Mesh:
