@@ -146,3 +146,25 @@ def test_one_operator_serves_every_placement_of_the_cell():
     assert error < 2.5e-2
     with pytest.raises(ElasticInputError, match="must carry the mesh"):
         elastic.solve_placed(Body(wb.mesh.sphere(A, 4)), normals @ STRESS)
+
+
+def test_an_adhesive_jkr_contact_flattens_the_sphere_by_jkrs_approach():
+    """scenes/adherent_shapes.py: the JKR pressure of contact radius a = 1.94 um (the dome's base;
+    Johnson, Kendall & Roberts 1971: zero net load, a^3 = 9 pi W R^2 / 2E*), with no fluid, on
+    the pole-graded G = 0.5 kPa sphere: the cell's height over its flattened base falls by
+    JKR's approach delta = a^2 / R - sqrt(2 pi W a / E*) = 0.251 um, within 5 % (-1.9 %
+    measured)."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scenes"))
+    import adherent_shapes as shapes
+
+    mesh = wb.mesh.sphere(shapes.RADIUS, 8, pole_grading=4.0)
+    elastic = InteriorElasticity(mesh, shapes.MODULUS, shapes.RATIO)
+    a = 1.94e-6
+    shaped, _, energy = shapes.adherent_shape(mesh, elastic, np.zeros((mesh.n_elements, 3)), a)
+    height, _ = shapes.measures(shaped.nodes, 0.0, a)
+    jkr = a**2 / shapes.RADIUS - np.sqrt(2 * np.pi * energy * a / shapes.ESTAR)
+    assert jkr == pytest.approx(0.251e-6, rel=2e-3)
+    assert 2 * shapes.RADIUS - height == pytest.approx(jkr, rel=0.05)
