@@ -240,3 +240,29 @@ def test_a_folding_surface_stops_the_run_and_a_coarse_step_warns():
     _, model, sim = cell_in_shear(2, CA, 2.5e-3)
     with pytest.warns(wb.DeformationWarning, match="lags the material"):
         sim.step(model.initial_state([[0.0, 0.0, 0.0]]))
+
+
+@pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
+@pytest.mark.filterwarnings("ignore::warpbem.DeformationWarning")
+def test_a_cell_pressed_on_the_wall_holds_its_contact_force_while_it_flattens():
+    """A G = 4 kPa cell (k = 4) pressed on the wall by 350 pN, released at the gap where eq. 3.1
+    gives 350 pN: the repulsion holds 350 pN at every step (to 1 %) while the surface under it
+    flattens by several nm. The gaps leave out the contact load's own flattening (module
+    docstring: contacts); counted in them, the force swung 127-419 pN from step to step and
+    still by +-1 pN after 40 steps."""
+    from warpbem.forces.external import ExternalLoads
+
+    force = 350e-12
+    mesh = wb.mesh.sphere(A, 4)
+    flow = Flow(0.0, 1e-3, True)
+    model = Model([mesh], [False], flow, interactions=[
+        Repulsion(), ExternalLoads([False], [[0.0, 0.0, -force]], [[0.0, 0.0, 0.0]]),
+        Deformation([mesh], [True], [4e3], [0.33], flow)], policy=StepPolicy(2e-5, 1e-7, 1e-9), scheme="euler")
+    sim = Simulator(model)
+    layers = np.log(1 + 1e-12 * 2e9 / force) / 2e9  # eq. 3.1 (F0 = 1e-12 J, 2 /nm) at 350 pN
+    state = model.initial_state([[0.0, 0.0, A + 225e-9 + layers]])
+    for _ in range(6):
+        state, frame = sim.step(state)
+        assert np.linalg.norm(frame.loads["repulsion"].force[0]) == pytest.approx(force, rel=1e-2)
+    flattening = state.parts["deformation"]["contact_displacement"][0, :, 2].max()
+    assert flattening > 2e-9

@@ -156,17 +156,23 @@ class Model:
         """The implicit interactions, solved together in every step (``dynamics/implicit.py``)."""
         return tuple(x for x in self.interactions if x.implicit)
 
-    def bodies(self, state: State) -> list[Body]:
+    def bodies(self, state: State, contact: bool = False) -> list[Body]:
+        """The bodies of a state; ``contact``: with the shapes their gaps are measured on
+        (``Interaction.body_meshes``), which differ from their surfaces only for deformable cells."""
         if len(state.positions) != self.n_bodies:
             raise ValueError(f"the state has {len(state.positions)} bodies, the model {self.n_bodies}")
         meshes, slip = list(self.meshes), [None] * self.n_bodies
         for x in self.interactions:  # deformable cells: the shapes of this state, their surfaces' motion
             if x.shapes_bodies and x.name in state.parts:
-                meshes = x.body_meshes(state.parts[x.name], meshes)
+                meshes = x.body_meshes(state.parts[x.name], meshes, contact)
                 slip = x.surface_velocities(state.parts[x.name], slip)
         bodies = [Body(m, position=p, orientation=q, fixed=f)
                   for m, p, q, f in zip(meshes, state.positions, state.orientations, self.fixed)]
         return [b if v is None else replace(b, surface_velocity=v @ b.rotation().T) for b, v in zip(bodies, slip)]
+
+    @property
+    def shapes_bodies(self) -> bool:
+        return any(x.shapes_bodies for x in self.interactions)
 
     def initial_state(self, positions, orientations=None, time: float = 0.0) -> State:
         """The state at ``time`` with the bodies placed; each interaction's own part at its start."""

@@ -164,7 +164,8 @@ class Simulator:
         """The bodies of a state, placement checked, and its Contacts (gaps, once per state)."""
         bodies = self.model.bodies(state)
         check_placement(bodies, self.model.flow.wall)
-        return bodies, Contacts(bodies, self.model.outer_radii, self.model.flow.wall, self.gaps)
+        shapes = self.model.bodies(state, contact=True) if self.model.shapes_bodies else None
+        return bodies, Contacts(bodies, self.model.outer_radii, self.model.flow.wall, self.gaps, shapes)
 
     def _implicit(self, state, bodies, contacts, background, snapshot, dt_plan):
         """The implicit interactions' coordinates at this state, joined, with the solves of the

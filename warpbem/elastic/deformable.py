@@ -74,11 +74,21 @@ behind. The traction is the fluid's and the contact loads' over the step (the im
 the step's end where they act on the surfaces, ``ImplicitCoordinates.point_loads``: the
 repulsion's), each spread over its Hertz patch (thesis eq. 4.8-4.9); a patch narrower than
 the elements lands on the nearest one, so the mesh, not Hertz, sets the contact's resolution.
-A body load (gravity) has no surface traction: the fluid's balances it, so the cell's
-surface traction is out of balance by it (the elastic solve reports the imbalance; a settling
-cell's weight, 0.3 pN, is small against its fluid stresses, ~30 pN at 100 1/s). The film
-between close surfaces is in the fluid traction as far as the mesh resolves the gap; no
-lubrication formula is added on top (``forces/lubrication.py``).
+A body load (gravity, an applied force) has no surface traction: the surface traction is out of
+balance by it, and the elastic problem takes it balanced by the traction a + b x (x - c) over
+the whole surface with its force and moment (``balanced``: the smooth stand-in for the body
+load). The film between close surfaces is in the fluid traction as far as the mesh resolves
+the gap; no lubrication formula is added on top (``forces/lubrication.py``).
+
+Contacts. The gaps the contact laws see (the repulsion of thesis eq. 3.1, the adhesion's reach)
+are measured on the cell without the flattening of its own contact and bond loads (``Contacts``
+``shapes``; the part ``contact_displacement``, the elastic response to those loads' tractions
+alone, balanced as above), while the flow and the receptors see the whole displacement. The
+contact's own compliance is the law's (eq. 3.1 is the steric spring of the roughness layers;
+the Hertz patch is below the elements): counted in the gap as well, and a step late, it closed
+a loop of gain ~ (inverse length of eq. 3.1) x (the flattening under the load), 2 /nm x 1-6 nm,
+which oscillated from step to step and, in a rolling 4 kPa cell at 320 pN, threw the contact
+force to 7 nN in one step (measured; README, "Where the deformable model fails").
 
 Where it fails, and what the solver does there (measured: README, "Stability of deformable
 cells"). The displacement's amplitude, max |u| / a (a the equivalent radius), past
@@ -115,6 +125,23 @@ LINEAR_RANGE = 0.2  # max |u| / a past which the linear material is inaccurate (
 LINEAR_LIMIT = 0.5  # max |u| / a past which a run stops
 UNRESOLVED_APPROACH = 1e-9  # m: a contact patch narrower than the elements warns past this Hertz approach
 ROTATION_PER_STEP = 0.1  # rad: a larger turn in one step lags the target by about half of it
+
+
+def balanced(mesh: Mesh, traction: np.ndarray) -> np.ndarray:
+    """``traction`` (E, 3, Pa) less the traction a + b x (x - c) over the whole surface (c its
+    centroid) with its force and moment, so that it is in equilibrium (an elastic solution
+    exists): the smooth balance of a concentrated load."""
+    centres, areas = mesh.element_nodes()[:, 8], mesh.element_areas()
+    arm = centres - centres.T @ areas / areas.sum()
+    columns = []
+    for i in range(3):
+        e = np.zeros(3)
+        e[i] = 1.0
+        columns += [np.tile(e, (len(areas), 1)), np.cross(e, arm)]
+    def resultant(t):
+        return np.concatenate([areas @ t, areas @ np.cross(centres, t)])
+    coefficients = np.linalg.lstsq(np.array([resultant(c) for c in columns]).T, resultant(traction), rcond=None)[0]
+    return traction - sum(c * column for c, column in zip(coefficients, columns))
 
 
 class DeformationWarning(UserWarning):
@@ -178,6 +205,9 @@ class Deformation(Interaction):
                                         (n, self.max_nodes, 3)),
                 "node_velocity": ("m/s (body frame: the displacement's rate at the state)",
                                   (n, self.max_nodes, 3)),
+                "contact_displacement": ("m (body frame: the part of node_displacement from the contact and bond"
+                                         " loads, which the gaps leave out)", (n, self.max_nodes, 3)),
+                "contact_target": ("m (body frame: that part of target_displacement)", (n, self.max_nodes, 3)),
                 "steps_since_solve": ("1 (steps since the target was solved; per body, all alike)", (n,)),
                 "orientation": ("1 (quaternion w, x, y, z of the shape measured)", (n, 4))}
 
@@ -185,6 +215,7 @@ class Deformation(Interaction):
         zeros = np.zeros((len(self.meshes), self.max_nodes, 3))
         # the first step solves its target
         return {"node_displacement": zeros, "target_displacement": zeros.copy(), "node_velocity": zeros.copy(),
+                "contact_displacement": zeros.copy(), "contact_target": zeros.copy(),
                 "steps_since_solve": np.full(len(self.meshes), float(self.update_interval)),
                 "orientation": np.array([b.orientation for b in bodies])}
 
@@ -193,11 +224,14 @@ class Deformation(Interaction):
         surface's slip over a step moving it by no more than that (module docstring)."""
         return bool(np.abs(part["node_displacement"]).max() <= tolerance)
 
-    def body_meshes(self, part, meshes):
+    def body_meshes(self, part, meshes, contact=False):
         out = list(meshes)
         for i in np.flatnonzero(self.deformable):
             nodes = self.meshes[i].nodes
-            out[i] = Mesh(nodes + part["node_displacement"][i, :len(nodes)], self.meshes[i].elements)
+            u = part["node_displacement"][i, :len(nodes)]
+            if contact:  # the gaps: without the contact loads' own flattening (module docstring)
+                u = u - part["contact_displacement"][i, :len(nodes)]
+            out[i] = Mesh(nodes + u, self.meshes[i].elements)
         return out
 
     def surface_velocities(self, part, velocities):
@@ -211,19 +245,22 @@ class Deformation(Interaction):
     def advance_shape(self, part, start_bodies, start_loads, end_orientations, dt, point_loads):
         if not self.elastic:
             self.prepare(self.device)
-        target, age = part["target_displacement"], part["steps_since_solve"]
+        target, contact_target = part["target_displacement"], part["contact_target"]
+        age = part["steps_since_solve"]
         if age[0] >= self.update_interval:
-            target, age = self._target(start_bodies, start_loads, point_loads), np.zeros_like(age)
+            (target, contact_target), age = self._target(start_bodies, start_loads, point_loads), np.zeros_like(age)
         displacement, rate = np.zeros_like(part["node_displacement"]), np.zeros_like(part["node_displacement"])
+        contact = np.zeros_like(displacement)
         for i in self.elastic:
             tau = self.relaxation_time(i)
             keep = np.exp(-dt / tau) if tau > 0 else 0.0
             displacement[i] = target[i] + (part["node_displacement"][i] - target[i]) * keep
+            contact[i] = contact_target[i] + (part["contact_displacement"][i] - contact_target[i]) * keep
             # the rate at the end state (module docstring: surface motion)
             rate[i] = (target[i] - displacement[i]) / tau if tau > 0 else (displacement[i] - part["node_displacement"][i]) / dt
             self._check(i, displacement[i], start_bodies[i].orientation, end_orientations[i], dt)
         return {"node_displacement": displacement, "target_displacement": target, "steps_since_solve": age + 1.0,
-                "node_velocity": rate,
+                "node_velocity": rate, "contact_displacement": contact, "contact_target": contact_target,
                 "orientation": np.array(end_orientations, dtype=float)}
 
     def _node_normals(self, nodes, i):
@@ -270,8 +307,10 @@ class Deformation(Interaction):
         return float(hertz_radius(abs(force), 1.0 / curvature, total))
 
     def _target(self, start_bodies, start_loads, point_loads):
-        """u* of every deformable body: the elastic balance of the start state's traction, the
-        fluid's and the contact loads' (each spread over its Hertz patch, ``solve_traction``)."""
+        """(u*, its contact part) of every deformable body: the elastic balance of the start
+        state's traction, the fluid's and the contact loads' (each spread over its Hertz patch,
+        ``solve_traction``); the contact part that of the contact loads' traction alone,
+        balanced by a traction linear over the surface (module docstring: contacts)."""
         force, torque = start_loads.force.copy(), start_loads.torque.copy()
         spread = []
         for body, other, point, load in point_loads:  # these act on the surface, not as body loads
@@ -288,11 +327,20 @@ class Deformation(Interaction):
                                   force, torque, self.device, point_loads=spread,
                                   quadrature_order=self.quadrature_order, contact_refinement=self.contact_refinement)
         target = np.zeros((len(self.meshes), self.max_nodes, 3))
+        contact = np.zeros_like(target)
         for i, elastic in self.elastic.items():
             # each element's traction, in the body frame of the state it was solved at
-            local = elastic.solve(traction.on_mesh(i) @ start_bodies[i].rotation())
-            target[i, :len(self.meshes[i].nodes)] = nodal_displacement(self.meshes[i], local.displacement, self.weights[i])
-        return target
+            rotation = start_bodies[i].rotation()
+            total = traction.on_mesh(i) @ rotation
+            nodes = slice(0, len(self.meshes[i].nodes))
+            # a body load (gravity, an applied force) has no surface traction: its smooth balance
+            target[i, nodes] = nodal_displacement(self.meshes[i], elastic.solve(balanced(self.meshes[i], total)).displacement,
+                                                  self.weights[i])
+            if any(body == i for body, _, _, _ in spread):
+                loads = balanced(self.meshes[i], total - traction.on_mesh(i, total=False) @ rotation)
+                contact[i, nodes] = nodal_displacement(self.meshes[i], elastic.solve(loads).displacement,
+                                                       self.weights[i])
+        return target, contact
 
     def derived_columns(self):
         n = len(self.meshes)

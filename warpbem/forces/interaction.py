@@ -169,8 +169,10 @@ class Interaction:
         called before the end's bodies are built, so they take the new shapes."""
         return part
 
-    def body_meshes(self, part: dict, meshes: list) -> list:
-        """The meshes of the bodies at a state with this part (body frame); default unchanged."""
+    def body_meshes(self, part: dict, meshes: list, contact: bool = False) -> list:
+        """The meshes of the bodies at a state with this part (body frame); ``contact``: the
+        shapes the gaps are measured on (a deformable cell's without the flattening of its own
+        contact loads); default unchanged."""
         return meshes
 
     def surface_velocities(self, part: dict, velocities: list) -> list:

@@ -116,12 +116,15 @@ class Contacts:
     so no pair is searched twice for the same state.
 
     ``bodies``: the ``Body`` list; ``outer_radii``: their bounding radii (``outer_radius``);
-    ``wall``: the plane z = 0 is there; ``finder``: a ``GapFinder``. Pairs are as in
-    ``candidate_pairs``: a free body and another body or the wall.
+    ``wall``: the plane z = 0 is there; ``finder``: a ``GapFinder``; ``shapes``: the bodies the
+    gaps are measured on, if not ``bodies`` (deformable cells without the flattening of their
+    own contact loads: elastic/deformable.py). Pairs are as in ``candidate_pairs``: a free body
+    and another body or the wall.
     """
 
-    def __init__(self, bodies, outer_radii, wall: bool, finder: GapFinder):
+    def __init__(self, bodies, outer_radii, wall: bool, finder: GapFinder, shapes=None):
         self.bodies = list(bodies)
+        self.shapes = self.bodies if shapes is None else list(shapes)
         self.positions = np.array([b.position for b in self.bodies])
         self.outer_radii = np.asarray(outer_radii, dtype=float)
         self.fixed = np.array([b.fixed for b in self.bodies])
@@ -132,7 +135,7 @@ class Contacts:
     def gap(self, i: int, j: int) -> Gap:
         """The exact gap of free body i to body j (or WALL), searched once."""
         if (i, j) not in self._gaps:
-            self._gaps[(i, j)] = self.finder.between(self.bodies, i, j)
+            self._gaps[(i, j)] = self.finder.between(self.shapes, i, j)
         return self._gaps[(i, j)]
 
     def pairs(self, within: float) -> list[tuple[int, int]]:
