@@ -63,8 +63,8 @@ def rolling(path: Path, label: str) -> list[dict]:
         shaped = "deformation_node_displacement" in f
         displacement = np.abs(f["deformation_node_displacement"][:]).max() if shaped else float("nan")
     rest = np.flatnonzero(u < 0.01 * u[0])
-    return [dict(run=label, free_um_s=u[0] * 1e6, **{f"u_{ms}ms_um_s": np.interp(ms * 1e-3, t, u) * 1e6
-                                                   for ms in (1, 2, 5, 7, 10)},
+    return [dict(run=label, free_um_s=u[0] * 1e6, **{f"u_{ms}ms_um_s": np.interp(ms * 1e-3, t, u) * 1e6 if ms * 1e-3 <= t[-1] * (1 + 1e-9)
+                                                   else float("nan") for ms in (1, 2, 5, 7, 10)},
                  u_end_um_s=u[-1] * 1e6, rest_ms=t[rest[0]] * 1e3 if len(rest) else float("nan"),
                  rolled_um=(x[-1] - x[0]) * 1e6, bonds_end=int(bonds[-1]), bonds_max=int(bonds.max()),
                  area_mean_um2=np.mean(area) * 1e12, area_end_um2=area[-1] * 1e12, t_end_ms=t[-1] * 1e3,

@@ -4,12 +4,19 @@ the thesis's statements.
 
     python scenes/thesis_ch5.py --run --workers 2   # runs what is missing (about an hour on 2 cores)
     python scenes/thesis_ch5.py                      # table and figures from the runs on disk
+    warpbem sweep scenes/fig5_14_18_deformable_free.toml --output-dir results/deformable_free
+    python scenes/thesis_ch5.py                      # also tabulates those (issue 10 item 8)
 
 Runs go to results/ch5/<scene>/pointNNN.h5 (the sweep's grid order); this writes
 results/ch5/summary.csv (one row per case, lengths in nm; the lone cell of
 reference_free_cell.toml gives the sedimentation to subtract) and results/ch5/<scene>.png: the free
 cell's height change Z(t) - Z(0) for every case, one panel per value of the scene's first sweep
 axis when it has two (as the thesis's figures pair them), and the closest surface gap.
+
+The deformable free cell (scenes/fig5_14_18_deformable_free.toml, results/deformable_free): per
+figure and material, the free cell's dZ across the adherent cell, the same for the free cell
+alone (the adherent cell 1 mm aside: its own drift over the same path), and their difference,
+the adherent cell's net effect (results/deformable_free.csv).
 """
 
 from __future__ import annotations
@@ -129,6 +136,27 @@ def plot(scene_name, rows, out_png):
     plt.close(fig)
 
 
+def deformable_free(folder: Path) -> list[dict]:
+    """Rows of the deformable free cell sweep (module docstring), of the runs on disk."""
+    _, points = cases("fig5_14_18_deformable_free")
+    runs = {}
+    for i, (labels, _) in enumerate(points):
+        path = folder / f"point{i:03d}.h5"
+        if path.exists():
+            runs[(labels["case"], labels["cell"], labels["obstacle"])] = free_cell_metrics(path, {})
+    rows = []
+    for (case, cell, obstacle), metrics in runs.items():
+        if obstacle != "adherent" or (case, cell, "none") not in runs:
+            continue
+        alone = runs[(case, cell, "none")]
+        rows.append(dict(case=case, cell=cell, across_dz_nm=metrics["across_dz_nm"],
+                         alone_across_dz_nm=alone["across_dz_nm"],
+                         adherent_effect_nm=metrics["across_dz_nm"] - alone["across_dz_nm"],
+                         rise_nm=metrics["rise_nm"], closest_gap_nm=metrics["closest_gap_nm"],
+                         end_time_s=metrics["end_time_s"]))
+    return rows
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--run", action="store_true", help="run the cases that have no result yet")
@@ -155,6 +183,18 @@ def main():
                           **{k: v for k, v in r.items() if k not in ("labels", "file")}})
         if rows:
             plot(name, rows, results / f"{name}.png")
+    shaped = deformable_free(HERE.parent / "results" / "deformable_free")
+    if shaped:
+        with (HERE.parent / "results" / "deformable_free.csv").open("w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=list(shaped[0]))
+            writer.writeheader()
+            writer.writerows(shaped)
+        print("| case | free cell | dZ across | alone | adherent cell's effect | rise | closest gap | t end [s] |")
+        print("|---|---|---|---|---|---|---|---|")
+        for r in shaped:
+            print(f"| {r['case']} | {r['cell']} | {r['across_dz_nm']:.1f} | {r['alone_across_dz_nm']:.1f}"
+                  f" | {r['adherent_effect_nm']:.1f} | {r['rise_nm']:.0f} | {r['closest_gap_nm']:.0f}"
+                  f" | {r['end_time_s']:.3f} |")
     if not table:
         raise SystemExit(f"no runs under {results}; use --run")
     with (results / "summary.csv").open("w", newline="") as f:
