@@ -95,7 +95,7 @@ def compliant_rolling_chart(path: Path) -> Path | None:
             keep = t <= 0.0125  # the deformable runs' 12 ms
             ax.plot(t[keep] * 1e3, u[keep] * 1e6, "--", color=line.get_color(), lw=1, label=f"{label}: rigid, Hertz patch")
     ax.set(xlabel="time [ms]", ylabel="rolling velocity U [um/s]",
-           title="soft bonds (0.5 dyn/cm): deformable cells against rigid cells with a Hertz patch")
+           title="soft bonds: deformable cells against rigid ones with a Hertz patch")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()

@@ -31,3 +31,21 @@ def test_nodes_take_a_linear_displacement_exactly(k):
     np.testing.assert_allclose(moved.nodes, mesh.nodes @ (np.eye(3) + eps).T, rtol=0, atol=1e-12 * A)
     with pytest.raises(ValueError, match="element_displacement must have shape"):
         nodal_displacement(mesh, np.zeros((3, 3)))
+
+
+def test_a_concentrated_load_is_balanced_by_a_smooth_traction_and_a_balanced_one_is_left_alone():
+    """elastic/deformable.py ``balanced``: after it the traction has no resultant force or moment
+    (to 1e-12 of the load), the added traction is a + b x (x - c); a traction already in
+    equilibrium (a uniform pressure) comes back unchanged."""
+    from warpbem.elastic.deformable import balanced
+
+    mesh = wb.mesh.sphere(5e-6, 4)
+    centres, areas = mesh.element_nodes()[:, 8], mesh.element_areas()
+    load = np.zeros((mesh.n_elements, 3))
+    bottom = np.argmin(centres[:, 2])
+    load[bottom] = np.array([1e-12, 0.0, 3e-10]) / areas[bottom]  # 0.3 nN up, 1 pN along x, off-centre
+    out = balanced(mesh, load)
+    force, moment = areas @ out, areas @ np.cross(centres, out)
+    assert np.abs(force).max() < 1e-12 * 3e-10 and np.abs(moment).max() < 1e-12 * 3e-10 * 5e-6
+    pressure = -100.0 * centres / np.linalg.norm(centres, axis=1, keepdims=True)
+    np.testing.assert_allclose(balanced(mesh, pressure), pressure, atol=1e-6 * 100.0)

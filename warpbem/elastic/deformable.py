@@ -131,15 +131,17 @@ def balanced(mesh: Mesh, traction: np.ndarray) -> np.ndarray:
     """``traction`` (E, 3, Pa) less the traction a + b x (x - c) over the whole surface (c its
     centroid) with its force and moment, so that it is in equilibrium (an elastic solution
     exists): the smooth balance of a concentrated load."""
-    centres, areas = mesh.element_nodes()[:, 8], mesh.element_areas()
-    arm = centres - centres.T @ areas / areas.sum()
+    centres, areas, size = mesh.element_nodes()[:, 8], mesh.element_areas(), mesh.size()
+    arm = (centres - centres.T @ areas / areas.sum()) / size  # one scale for the least squares
     columns = []
     for i in range(3):
         e = np.zeros(3)
         e[i] = 1.0
         columns += [np.tile(e, (len(areas), 1)), np.cross(e, arm)]
-    def resultant(t):
-        return np.concatenate([areas @ t, areas @ np.cross(centres, t)])
+
+    def resultant(t):  # force, and moment / size
+        return np.concatenate([areas @ t, areas @ np.cross(centres, t) / size])
+
     coefficients = np.linalg.lstsq(np.array([resultant(c) for c in columns]).T, resultant(traction), rcond=None)[0]
     return traction - sum(c * column for c, column in zip(coefficients, columns))
 
