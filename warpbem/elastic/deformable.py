@@ -42,13 +42,16 @@ then slides along its steady shape instead of turning with it as a rigid body wo
 what lifts a deformed cell off the wall (the drift of drops, capsules and vesicles in wall shear:
 Smart & Leighton 1991; Abkarian, Lartigue & Viallat 2002). ``surface_velocity = False`` solves
 the deformed shape as rigid at the instant (it then drifts towards the wall, a finding of
-scenes/README.md). du/dt is the relaxation's rate at the state, (u* - u) / tau towards the
-target of the step that led to it (which a cell with tau << dt has reached: its surface is then
-at rest on its shape, where the step's mean rate would have put a pulse of (u_(n+1) - u_n) / dt
-into the flow, 1.9 % of a stiff rolling cell's velocity in its first step), and the mean rate
-over the step in the quasi-static model; it lags the traction by a step (first order in dt).
-The traction of the target is still the rigid shape's, the surface motion's own traction being
-what tau models.
+scenes/README.md). du/dt is the displacement's mean rate over the last step, (u_(n+1) - u_n) /
+dt: for a cell with tau << dt that is the rate of its target, which in steady tank-treading
+turns backwards in the body frame at the cell's spin (the slip that lifts it); a target that
+jumps (a cell released undeformed, a bond formed) puts its jump into the step's slip, its
+integrated effect (the surface moves by the jump within tau; spread over the step it moved a
+stiff cell released undeformed at 1.9 % of its velocity in its first step). The rate at the end
+state, (u* - u) / tau, would miss the tank-treading slip of stiff cells (tried: a 0.5 kPa cell
+then drifted towards the wall as a rigid one). It lags the traction by a step (first order in
+dt). The traction of the target is still the rigid shape's, the surface motion's own traction
+being what tau models.
 
 Adhesion (``forces/adhesion.py``). A deformable cell's receptors ride on its surface: each tip
 moves with the displacement of the surface point under it (the microvillus keeps its reference
@@ -205,7 +208,7 @@ class Deformation(Interaction):
         return {"node_displacement": ("m (body frame; rows past a mesh's nodes are zero)", (n, self.max_nodes, 3)),
                 "target_displacement": ("m (body frame: the elastic balance of the last traction solved)",
                                         (n, self.max_nodes, 3)),
-                "node_velocity": ("m/s (body frame: the displacement's rate at the state)",
+                "node_velocity": ("m/s (body frame: the displacement's rate over the last step)",
                                   (n, self.max_nodes, 3)),
                 "contact_displacement": ("m (body frame: the part of node_displacement from the contact and bond"
                                          " loads, which the gaps leave out)", (n, self.max_nodes, 3)),
@@ -258,8 +261,7 @@ class Deformation(Interaction):
             keep = np.exp(-dt / tau) if tau > 0 else 0.0
             displacement[i] = target[i] + (part["node_displacement"][i] - target[i]) * keep
             contact[i] = contact_target[i] + (part["contact_displacement"][i] - contact_target[i]) * keep
-            # the rate at the end state (module docstring: surface motion)
-            rate[i] = (target[i] - displacement[i]) / tau if tau > 0 else (displacement[i] - part["node_displacement"][i]) / dt
+            rate[i] = (displacement[i] - part["node_displacement"][i]) / dt  # over the step (module docstring)
             self._check(i, displacement[i], start_bodies[i].orientation, end_orientations[i], dt)
         return {"node_displacement": displacement, "target_displacement": target, "steps_since_solve": age + 1.0,
                 "node_velocity": rate, "contact_displacement": contact, "contact_target": contact_target,
