@@ -50,8 +50,11 @@ integrated effect (the surface moves by the jump within tau; spread over the ste
 stiff cell released undeformed at 1.9 % of its velocity in its first step). The rate at the end
 state, (u* - u) / tau, would miss the tank-treading slip of stiff cells (tried: a 0.5 kPa cell
 then drifted towards the wall as a rigid one). It lags the traction by a step (first order in
-dt). The traction of the target is still the rigid shape's, the surface motion's own traction
-being what tau models.
+dt). The flattening of a cell's own contact and bond loads is left out of the slip, as it is
+out of the gaps (below: contacts): with it, a cell pressed on the wall flattened by 5.7 nm in its
+first step, the slip of that flattening drove its centre towards the wall, and the contact law,
+which sees the gap without the flattening, answered with 1.3 uN. The traction of the target is
+still the rigid shape's, the surface motion's own traction being what tau models.
 
 Adhesion (``forces/adhesion.py``). A deformable cell's receptors ride on its surface: each tip
 moves with the displacement of the surface point under it (the microvillus keeps its reference
@@ -261,7 +264,8 @@ class Deformation(Interaction):
             keep = np.exp(-dt / tau) if tau > 0 else 0.0
             displacement[i] = target[i] + (part["node_displacement"][i] - target[i]) * keep
             contact[i] = contact_target[i] + (part["contact_displacement"][i] - contact_target[i]) * keep
-            rate[i] = (displacement[i] - part["node_displacement"][i]) / dt  # over the step (module docstring)
+            # over the step, without the contact loads' flattening (module docstring)
+            rate[i] = (displacement[i] - contact[i] - part["node_displacement"][i] + part["contact_displacement"][i]) / dt
             self._check(i, displacement[i], start_bodies[i].orientation, end_orientations[i], dt)
         return {"node_displacement": displacement, "target_displacement": target, "steps_since_solve": age + 1.0,
                 "node_velocity": rate, "contact_displacement": contact, "contact_target": contact_target,
