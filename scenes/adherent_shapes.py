@@ -35,6 +35,7 @@ import numpy as np
 
 import warpbem as wb
 from warpbem.app.plotting import _pyplot
+from warpbem.elastic.deformable import balanced
 from warpbem.elastic.interior import InteriorElasticity
 from warpbem.elastic.shape import nodal_displacement
 from warpbem.surfaces import quad9
@@ -62,7 +63,6 @@ def jkr_pressure(r, a, energy):
 
 def adherent_shape(mesh, elastic, fluid, a):
     """The deformed mesh (body frame) and its displacement (nodes) for contact radius a."""
-    centres, areas = mesh.element_nodes()[:, 8], mesh.element_areas()
     energy = jkr_energy(a)
     # each element's mean of the JKR pressure, by a 12 x 12 Gauss rule (the rim's singularity is
     # integrable; the rule resolves the patch on elements that straddle its edge)
@@ -75,20 +75,8 @@ def adherent_shape(mesh, elastic, fluid, a):
     traction = fluid.copy()
     traction[:, 2] += (pressure * jacobian).sum(axis=1) / jacobian.sum(axis=1)  # pushes up, into the cell
     # the fluid's load and the discretised JKR pressure's small residual: carried by the bonds, a
-    # traction linear across the patch (least squares)
-    arm = centres[patch] - centres[patch].mean(axis=0)
-    basis = []
-    for i in range(3):
-        e = np.zeros(3)
-        e[i] = 1.0
-        basis.append(np.tile(e, (patch.sum(), 1)))
-        basis.append(np.cross(e, arm))
-    load = np.array([np.concatenate([(areas[patch, None] * b).sum(axis=0),
-                                     (areas[patch, None] * np.cross(centres[patch], b)).sum(axis=0)]) for b in basis]).T
-    out = -np.concatenate([(areas[:, None] * traction).sum(axis=0),
-                           (areas[:, None] * np.cross(centres, traction)).sum(axis=0)])
-    coefficients = np.linalg.lstsq(load, out, rcond=None)[0]
-    traction[patch] += sum(c * b for c, b in zip(coefficients, basis))
+    # traction linear across the patch
+    traction = balanced(mesh, traction, patch)
     u = nodal_displacement(mesh, elastic.solve(traction).displacement)
     return Mesh(mesh.nodes + u, mesh.elements), u, energy
 

@@ -133,17 +133,18 @@ UNRESOLVED_APPROACH = 1e-9  # m: a contact patch narrower than the elements warn
 ROTATION_PER_STEP = 0.1  # rad: a larger turn in one step lags the target by about half of it
 
 
-def balanced(mesh: Mesh, traction: np.ndarray) -> np.ndarray:
-    """``traction`` (E, 3, Pa) less the traction a + b x (x - c) over the whole surface (c its
-    centroid) with its force and moment, so that it is in equilibrium (an elastic solution
-    exists): the smooth balance of a concentrated load."""
+def balanced(mesh: Mesh, traction: np.ndarray, where=None) -> np.ndarray:
+    """``traction`` (E, 3, Pa) less the traction a + b x (x - c) over the elements ``where``
+    (default: the whole surface; c their centroid) with its force and moment, so that it is in
+    equilibrium (an elastic solution exists): the smooth balance of a concentrated load."""
     centres, areas, size = mesh.element_nodes()[:, 8], mesh.element_areas(), mesh.size()
-    arm = (centres - centres.T @ areas / areas.sum()) / size  # one scale for the least squares
+    where = np.ones(len(areas), bool) if where is None else np.asarray(where, bool)
+    arm = (centres - centres[where].T @ areas[where] / areas[where].sum()) / size  # one scale for the least squares
     columns = []
     for i in range(3):
         e = np.zeros(3)
         e[i] = 1.0
-        columns += [np.tile(e, (len(areas), 1)), np.cross(e, arm)]
+        columns += [np.where(where[:, None], e, 0.0), np.where(where[:, None], np.cross(e, arm), 0.0)]
 
     def resultant(t):  # force, and moment / size
         return np.concatenate([areas @ t, areas @ np.cross(centres, t) / size])
