@@ -71,6 +71,16 @@ def rolling(path: Path, label: str) -> list[dict]:
                  largest_displacement_nm=displacement * 1e9)]
 
 
+def save_chart(plt, fig, ax, path: Path, legend_size: float) -> Path:
+    """Grid and legend on ``ax``, the figure laid out, written to ``path`` (120 dpi) and closed."""
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=legend_size)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
 def compliant_rolling_chart(path: Path) -> Path | None:
     """U(t) of the deformable cells (results/compliant_rolling) beside the rigid-with-Hertz
     cells of the same parameters (results/fig4_09_11_soft_bonds), point by point."""
@@ -96,12 +106,7 @@ def compliant_rolling_chart(path: Path) -> Path | None:
             ax.plot(t[keep] * 1e3, u[keep] * 1e6, "--", color=line.get_color(), lw=1, label=f"{label}: rigid, Hertz patch")
     ax.set(xlabel="time [ms]", ylabel="rolling velocity U [um/s]",
            title="soft bonds: deformable cells against rigid ones with a Hertz patch")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_chart(plt, fig, ax, path, legend_size=7)
 
 
 def cells(path: Path, label: str) -> list[dict]:
@@ -163,12 +168,7 @@ def several_rolling_chart(trio: Path, lone: list[Path], window: float, path: Pat
         ax.plot(t[keep] * 1e3, (x[keep] - x[0]) * 1e6, color="0.5", lw=1, label="lone cell (seeds 1-5)" if k == 0 else None)
     ax.set(xlabel="time [ms]", ylabel="distance rolled [um]",
            title="rigid 5 um cells on stiff bonds (k_r0 = 1 /s, r0 = 0.6 A), 100 1/s")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_chart(plt, fig, ax, path, legend_size=8)
 
 
 def several_rolling() -> list[dict]:

@@ -27,11 +27,7 @@ from warpbem.surfaces.body import Body
 from warpbem.surfaces.gaps import WALL
 from warpbem.surfaces.mesh import Mesh
 
-A = 2e-6
-MESH = wb.mesh.sphere(A, 2)
-TABLE_4_1 = dict(receptor_density=20e12, spring_constant=5e-4, equilibrium_length=30e-9, off_rate=2.4,
-                 reactive_compliance=0.39e-10, on_rate=365.0)
-REST_GAP = 236e-9  # m: tips 61 nm above the wall, where gravity and eq. 3.1 balance
+from .test_adhesion import MESH, REST_GAP, TABLE_4_1, A  # the rolling cell of the adhesion tests
 
 
 def test_receptors_ride_on_the_displaced_surface():

@@ -189,6 +189,7 @@ class Deformation(Interaction):
         self.quadrature_order = quadrature_order
         self.shear_modulus, self.poisson_ratio = list(shear_modulus), list(poisson_ratio)
         self.max_nodes = max(len(m.nodes) for m in self.meshes)
+        self.radii = [m.equivalent_radius() for m in self.meshes]  # m: the Hertz curvatures, the amplitude scale
         self.device = "cpu"
         self.elastic, self.weights, self.normals, self.element_size = {}, {}, {}, {}
         self._warned = set()  # (body, kind) already reported
@@ -285,7 +286,7 @@ class Deformation(Interaction):
     def _check(self, i, displacement, start_orientation, end_orientation, dt):
         """Stop or warn where the model fails (module docstring: where it fails)."""
         nodes = self.meshes[i].nodes
-        amplitude = np.linalg.norm(displacement[:len(nodes)], axis=1).max() / self.meshes[i].equivalent_radius()
+        amplitude = np.linalg.norm(displacement[:len(nodes)], axis=1).max() / self.radii[i]
         turn = np.einsum("eqi,eqi->eq", self._node_normals(nodes + displacement[:len(nodes)], i), self.normals[i])
         advice = (f"lower the viscous number mu gdot / G (G = {self.shear_modulus[i]:g} Pa) or the loads on the"
                   " cell, or model it as rigid")
@@ -312,7 +313,7 @@ class Deformation(Interaction):
         nu^2) / E over the two (the wall and rigid bodies do not yield); 0 if neither yields."""
         pair = (body,) if other == WALL else (body, other)
         total = sum(compliance(self.shear_modulus[i], self.poisson_ratio[i]) for i in pair if self.deformable[i])
-        curvature = sum(1.0 / self.meshes[i].equivalent_radius() for i in pair)
+        curvature = sum(1.0 / self.radii[i] for i in pair)
         return float(hertz_radius(abs(force), 1.0 / curvature, total))
 
     def _target(self, start_bodies, start_loads, point_loads):
@@ -329,7 +330,7 @@ class Deformation(Interaction):
             spread.append((body, point, load, radius))
             # a patch the elements miss, whose Hertz approach a^2 / R (thesis eq. 4.9) matters
             if (self.deformable[body] and radius < self.element_size[body]
-                    and radius**2 / self.meshes[body].equivalent_radius() > UNRESOLVED_APPROACH):
+                    and radius**2 / self.radii[body] > UNRESOLVED_APPROACH):
                 self._warn_once(body, "patch", f"body {body}: its contact patch (Hertz radius {radius:.2g} m) is"
                                 " narrower than its elements: the mesh, not Hertz, sets the contact's flattening")
         traction = solve_traction(start_bodies, self.flow.shear_rate, self.flow.viscosity, self.flow.wall,
