@@ -51,7 +51,8 @@ from warpbem.app.io import open_result
 
 ROOT = Path(__file__).resolve().parent.parent
 ROUGHNESS = 175e-9
-ROLLING = ["fig4_04_06_stiff_bonds", "fig4_09_11_soft_bonds", "compliant_rolling", "fig4_12_14_bond_cap"]
+ROLLING = ["fig4_04_06_stiff_bonds", "fig4_09_11_soft_bonds", "compliant_rolling", "compliant_tether",
+           "fig4_12_14_bond_cap"]
 
 
 def rolling(path: Path, label: str) -> list[dict]:
@@ -81,31 +82,102 @@ def save_chart(plt, fig, ax, path: Path, legend_size: float) -> Path:
     return path
 
 
+# (deformable runs, their rigid-with-Hertz counterparts point by point, what they are)
+COMPLIANT = [("compliant_rolling", "fig4_09_11_soft_bonds", "soft bonds (0.5 dyn/cm), figs. 4.7-4.11"),
+             ("compliant_tether", "fig4_04_06_stiff_bonds", "stiff bonds (100 dyn/cm), figs. 4.3-4.6")]
+
+
 def compliant_rolling_chart(path: Path) -> Path | None:
-    """U(t) of the deformable cells (results/compliant_rolling) beside the rigid-with-Hertz
-    cells of the same parameters (results/fig4_09_11_soft_bonds), point by point."""
+    """U(t) of the deformable cells (results/compliant_rolling, results/compliant_tether)
+    beside the rigid-with-Hertz cells of the same parameters (results/fig4_09_11_soft_bonds,
+    results/fig4_04_06_stiff_bonds), point by point, one panel per bond stiffness."""
     from warpbem.app.plotting import _pyplot
 
-    pairs = [(ROOT / "results" / "fig4_09_11_soft_bonds" / p.name, p)
-             for p in sorted((ROOT / "results" / "compliant_rolling").glob("point*.h5"))]
-    if not pairs:
+    panels = [(title, [(ROOT / "results" / rigid / p.name, p) for p in sorted((ROOT / "results" / shaped).glob("point*.h5"))])
+              for shaped, rigid, title in COMPLIANT]
+    panels = [(title, pairs) for title, pairs in panels if pairs]
+    if not panels:
+        return None
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, len(panels), figsize=(6.5 * len(panels), 4.5), squeeze=False)
+    for ax, (title, pairs) in zip(axes[0], panels):
+        for rigid, shaped in pairs:
+            with open_result(shaped) as f:
+                scene = json.loads(f.attrs["scene"])
+                t, u = f["time"][:], f["velocity"][:, 0, 0]
+            body = scene["bodies"][0]
+            label = f"a = {body['mesh']['radius'] * 1e6:g} um, G = {body['shear_modulus'] / 1e3:g} kPa"
+            line, = ax.plot(t * 1e3, u * 1e6, lw=2, label=f"{label}: deformable")
+            if rigid.exists():
+                end = t[-1]
+                with open_result(rigid) as f:
+                    t, u = f["time"][:], f["velocity"][:, 0, 0]
+                keep = t <= end * 1.05  # over the deformable run's time
+                ax.plot(t[keep] * 1e3, u[keep] * 1e6, "--", color=line.get_color(), lw=1,
+                        label=f"{label}: rigid, Hertz patch")
+        ax.set(xlabel="time [ms]", ylabel="rolling velocity U [um/s]", title=title)
+        if ax is not axes[0][-1]:
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=7)
+    fig.suptitle("deformable cells against rigid ones with a Hertz patch", fontsize=10)
+    return save_chart(plt, fig, axes[0][-1], path, legend_size=7)
+
+
+def hertz_surface(rho, contact_radius, radius):
+    """Height (m) above the patch plane of a sphere of radius R pressed to Hertz contact radius
+    a_s, at lateral distance rho, its centre brought down by the approach delta = a_s^2 / R
+    (Johnson 1985, Contact Mechanics, eq. 3.42; the lowering of kernels/bonds.py): zero inside
+    the patch, the undeformed sphere less delta far from it."""
+    rho = np.abs(np.asarray(rho, float))
+    a2, sphere = contact_radius**2, rho**2 / (2 * radius)
+    if contact_radius <= 0:
+        return sphere
+    outside = ((2 * a2 - rho**2) * np.arcsin(np.minimum(contact_radius / np.maximum(rho, 1e-300), 1.0))
+               + contact_radius * np.sqrt(np.maximum(rho**2 - a2, 0.0))) / (np.pi * radius)
+    return np.where(rho <= contact_radius, 0.0, sphere + outside - a2 / radius)
+
+
+def tethered_profile_chart(path: Path) -> Path | None:
+    """Thesis fig. 4.3: the profile in the plane of shear (y = 0) of the deformable tethered
+    cells at the end of their runs (results/compliant_tether), their lowest region, against the
+    undeformed sphere and the Hertz surface of the same normal bond force (the flattening the
+    rigid-with-Hertz model puts below its elements)."""
+    from warpbem.app.plotting import _pyplot
+    from warpbem.app.scene import parse
+    from warpbem.forces.adhesion import hertz_contact_radius
+    from warpbem.surfaces.body import rotation_matrix
+
+    runs = sorted((ROOT / "results" / "compliant_tether").glob("point*.h5"))
+    if not runs:
         return None
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for rigid, shaped in pairs:
-        with open_result(shaped) as f:
+    for run in runs:
+        with open_result(run) as f:
             scene = json.loads(f.attrs["scene"])
-            t, u = f["time"][:], f["velocity"][:, 0, 0]
+            position, orientation = f["position"][-1, 0], f["orientation"][-1, 0]
+            u = f["deformation_node_displacement"][-1, 0]
+            force, t_end = float(f["contact_force"][-1, 0]), float(f["time"][-1])
         body = scene["bodies"][0]
-        label = f"a = {body['mesh']['radius'] * 1e6:g} um, G = {body['shear_modulus'] / 1e3:g} kPa"
-        line, = ax.plot(t * 1e3, u * 1e6, lw=2, label=f"{label}: deformable")
-        if rigid.exists():
-            with open_result(rigid) as f:
-                t, u = f["time"][:], f["velocity"][:, 0, 0]
-            keep = t <= 0.0125  # the deformable runs' 12 ms
-            ax.plot(t[keep] * 1e3, u[keep] * 1e6, "--", color=line.get_color(), lw=1, label=f"{label}: rigid, Hertz patch")
-    ax.set(xlabel="time [ms]", ylabel="rolling velocity U [um/s]",
-           title="soft bonds: deformable cells against rigid ones with a Hertz patch")
+        mesh = parse(scene, ROOT / "scenes").model.meshes[0]
+        radius, modulus, nu = body["mesh"]["radius"], body["shear_modulus"], body["poisson_ratio"]
+        section = np.abs(mesh.nodes[:, 1]) < 1e-6 * radius  # the rolling turns about y: the plane stays
+        rotation = rotation_matrix(orientation)
+        rigid = mesh.nodes[section] @ rotation.T + position
+        shaped = (mesh.nodes[section] + u[:len(mesh.nodes)][section]) @ rotation.T + position
+        low = rigid[:, 2] < position[2] - 0.8 * radius
+        order = np.argsort(rigid[low, 0] - position[0])
+        label = f"G = {modulus / 1e3:g} kPa, {force * 1e9:.2g} nN at {t_end * 1e3:g} ms"
+        line, = ax.plot((shaped[low, 0][order] - position[0]) * 1e6, shaped[low, 2][order] * 1e9, "o-", ms=3, lw=1.5,
+                        label=f"{label}: deformable mesh (y = 0 nodes)")
+        rho, bottom = np.linspace(-2.5e-6, 2.5e-6, 401), position[2] - radius
+        patch = hertz_contact_radius(force, radius, modulus, nu)
+        # the centre held, the surface pushed in by the approach delta = a_s^2 / R at the patch
+        ax.plot(rho * 1e6, (bottom + patch**2 / radius + hertz_surface(rho, patch, radius)) * 1e9, "--",
+                color=line.get_color(), lw=1, label=f"{label}: Hertz surface, a_s = {patch * 1e6:.2g} um (eq. 4.9)")
+    ax.plot(rho * 1e6, (bottom + rho**2 / (2 * radius)) * 1e9, ":", color="0.4", lw=1, label="undeformed sphere (last run)")
+    ax.set(xlabel="x - X [um] (flow direction)", ylabel="height above the wall [nm]",
+           title="fig. 4.3: the tethered compliant cell's contact (stiff bonds)")
     return save_chart(plt, fig, ax, path, legend_size=7)
 
 
@@ -230,6 +302,7 @@ def write(rows: list[dict], name: str):
 def main():
     write([row for name in ROLLING for row in sweep(name, rolling)], "thesis_ch4.csv")
     print("chart:", compliant_rolling_chart(ROOT / "docs" / "figures" / "compliant_rolling.png"))
+    print("chart:", tethered_profile_chart(ROOT / "docs" / "figures" / "compliant_tether.png"))
     single = ROOT / "results" / "free_meets_rolling.h5"
     write(several_rolling(), "rolling_cells.csv")
     trio = ROOT / "results" / "rolling_cells.h5"

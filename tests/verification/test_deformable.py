@@ -266,3 +266,37 @@ def test_a_cell_pressed_on_the_wall_holds_its_contact_force_while_it_flattens():
         assert np.linalg.norm(frame.loads["repulsion"].force[0]) == pytest.approx(force, rel=1e-2)
     flattening = state.parts["deformation"]["contact_displacement"][0, :, 2].max()
     assert flattening > 2e-9
+
+
+@pytest.mark.filterwarnings("ignore::warpbem.DeformationWarning")
+def test_the_gaps_leave_out_the_cells_own_contact_loads_with_the_fluids_answer_to_them():
+    """A G = 0.5 kPa cell (k = 4) 240 nm above the wall in 100 1/s shear with a bond's load at
+    its bottom (thesis fig. 4.3's tethered cell): the shape its gaps and tips are measured on (the
+    displacement less ``contact_displacement``) is the same for a bond load F and 3 F (to the
+    solves' tolerance), and the contact part grows with F. That part is the elastic response
+    to the load with the fluid's answer to it (the film's pressure under the cell, which moves it
+    as much as the load itself does): left in the gaps, it closed a loop of gain ~ bond
+    stiffness x the cell's compliance there (0.1 N/m x ~400 m/N) that threw a tethered 0.5 kPa
+    cell off its bonds within 0.8 ms (repulsion 2.7 nN, vertical velocity 1.3 mm/s; measured)."""
+    from warpbem.forces.interaction import Loads
+    from warpbem.surfaces.body import Body
+    from warpbem.surfaces.gaps import WALL
+
+    mesh = wb.mesh.sphere(A, 4)
+    flow = Flow(100.0, 1e-3, True)
+    deformation = Deformation([mesh], [True], [500.0], [0.33], flow, relaxation=False)
+    model = Model([mesh], [False], flow, interactions=[deformation])
+    state = model.initial_state([[0.0, 0.0, A + 240e-9]])
+    body = model.bodies(state)[0]
+    point = np.array([0.3e-6, 0.0, 240e-9])
+    shapes = {}
+    for scale in (1.0, 3.0):
+        bond = scale * np.array([-3e-11, 0.0, -1e-10])
+        loads = Loads(np.array([[0.0, 0.0, -2e-13]]) + bond, np.cross(point - body.position, bond)[None])
+        part = deformation.advance_shape(state.parts["deformation"], [body], loads, [body.orientation], 1e-5,
+                                         [(0, WALL, point, bond)])
+        shapes[scale] = part["node_displacement"][0], part["contact_displacement"][0]
+    (u1, c1), (u3, c3) = shapes[1.0], shapes[3.0]
+    assert np.abs(c1).max() > np.abs(u1 - c1).max() > 0  # 8.0 nm from the bond, 4.2 nm from the flow
+    np.testing.assert_allclose(u3 - c3, u1 - c1, rtol=0, atol=1e-6 * np.abs(c1).max())
+    assert 2.0 < np.abs(c3).max() / np.abs(c1).max() < 3.0  # sub-linear: the Hertz patch widens as F^(1/3)

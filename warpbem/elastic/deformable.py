@@ -333,8 +333,10 @@ class Deformation(Interaction):
                     and radius**2 / self.radii[body] > UNRESOLVED_APPROACH):
                 self._warn_once(body, "patch", f"body {body}: its contact patch (Hertz radius {radius:.2g} m) is"
                                 " narrower than its elements: the mesh, not Hertz, sets the contact's flattening")
+        loaded = {body for body, _, _, _ in spread}
         traction = solve_traction(start_bodies, self.flow.shear_rate, self.flow.viscosity, self.flow.wall,
                                   force, torque, self.device, point_loads=spread,
+                                  load_response=bool(loaded & set(self.elastic)),
                                   quadrature_order=self.quadrature_order, contact_refinement=self.contact_refinement)
         target = np.zeros((len(self.meshes), self.max_nodes, 3))
         contact = np.zeros_like(target)
@@ -346,8 +348,8 @@ class Deformation(Interaction):
             # a body load (gravity, an applied force) has no surface traction: its smooth balance
             target[i, nodes] = nodal_displacement(self.meshes[i], elastic.solve(balanced(self.meshes[i], total)).displacement,
                                                   self.weights[i])
-            if any(body == i for body, _, _, _ in spread):
-                loads = balanced(self.meshes[i], total - traction.on_mesh(i, total=False) @ rotation)
+            if i in loaded:  # all its loads with the fluid's answer to them (module docstring: contacts)
+                loads = balanced(self.meshes[i], traction.on_mesh(i, "loads") @ rotation)
                 contact[i, nodes] = nodal_displacement(self.meshes[i], elastic.solve(loads).displacement,
                                                        self.weights[i])
         return target, contact

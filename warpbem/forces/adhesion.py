@@ -222,7 +222,10 @@ class Adhesion(Interaction):
     def tips_at(self, bodies) -> np.ndarray:
         """The tips (R, 3, body frame) on the bodies' surfaces of a state: the reference tips
         moved by the displacement of the surface under them, for cells whose mesh at the state
-        is a deformed one (``Deformation``; the microvillus keeps its reference direction)."""
+        is a deformed one (``Deformation``; the microvillus keeps its reference direction). The
+        adhesion passes the shapes the gaps are measured on (``Contacts.shapes``: without the
+        flattening of a cell's own contact and bond loads, which the bond's spring and the Hertz
+        patch carry; elastic/deformable.py, "Contacts")."""
         tips = self.tips
         for c, b in enumerate(self.cells):
             if bodies[b].mesh is not self.meshes[b]:
@@ -240,7 +243,7 @@ class Adhesion(Interaction):
         centre = np.array([b.position for b in bodies])
         for b in self.cells:
             centre[b] = contacts.gap(int(b), WALL).point  # the foot of the closest point (x, y are used)
-        tips = self.tips_at(bodies)
+        tips = self.tips_at(contacts.shapes)
         return dict(tips=self._tips if tips is self.tips else wp.array(tips, dtype=k.vec3, device=self.device),
                     positions=wp.array(np.array([b.position for b in bodies]), dtype=k.vec3, device=self.device),
                     rotations=wp.array(np.array([b.rotation() for b in bodies]), dtype=k.mat33, device=self.device),
@@ -463,7 +466,7 @@ class Adhesion(Interaction):
         n_receptors = len(self.tips)
         bound = wp.zeros(n_receptors, dtype=int, device=self.device)
         self._launch(k.mark_bound, self.capacity, [receptor, bound])
-        cell_anchor, cell_deviation, cell_partner = self.cell_ligands(end_bodies)
+        cell_anchor, cell_deviation, cell_partner = self.cell_ligands(end_contacts.shapes)
         candidate = wp.zeros(n_receptors, dtype=int, device=self.device)
         ligand = wp.zeros(n_receptors, dtype=k.vec3, device=self.device)
         lowering = wp.zeros(n_receptors, dtype=wp.float64, device=self.device)

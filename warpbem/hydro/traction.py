@@ -37,6 +37,13 @@ tractions sum to the force exactly; a patch narrower than the elements there (or
 bond) lands on the nearest element, its moment shifted by at most that element's distance
 (the body's balance takes the moment as spread). They join the extra traction.
 
+With ``load_response`` the same operator also solves the loads acting alone, without the
+ambient flow (the body loads, the extra traction and the point loads): ``load_traction``, their
+surface traction plus the fluid's answer to them, in equilibrium on every body but for the body
+loads, which have no surface traction. By linearity the total traction less it is the ambient
+flow's on the force-free bodies (what the flow alone does to a deformable cell; the rest is its
+own loads' doing: elastic/deformable.py, "Contacts").
+
 Units: the kernels see lengths over the bodies' mean radius L and tractions over a scale
 sigma_0 (the largest of mu |gdot|, |F| / L^2, |T| / L^3); the solution is in Pa.
 """
@@ -65,6 +72,7 @@ class TractionSolution:
 
     traction: np.ndarray
     total_traction: np.ndarray  # fluid traction plus the extra traction given, Pa
+    load_traction: np.ndarray | None  # Pa: the loads alone, no flow, with the fluid's answer (or None)
     points: np.ndarray
     normals: np.ndarray
     areas: np.ndarray
@@ -82,12 +90,17 @@ class TractionSolution:
         """(E_p, 3) traction on body p's elements, Pa."""
         return self.traction[self.body_of_element == p]
 
-    def on_mesh(self, p: int, total: bool = True) -> np.ndarray:
-        """(E_mesh, 3) Pa: the (total, else fluid) traction on body p's own mesh elements, the
-        area-weighted mean over the elements the contact refinement split each into (the
-        input of the elastic problem, which works on the unrefined reference mesh)."""
+    def on_mesh(self, p: int, kind: str = "total") -> np.ndarray:
+        """(E_mesh, 3) Pa: the traction of ``kind`` ("total", "fluid" or "loads":
+        ``load_traction``) on body p's own mesh elements, the area-weighted mean over the
+        elements the contact refinement split each into (the input of the elastic problem, which
+        works on the unrefined reference mesh)."""
+        kinds = {"total": self.total_traction, "fluid": self.traction, "loads": self.load_traction}
+        if kinds.get(kind) is None:
+            raise ValueError(f"no {kind!r} traction in this solution (kinds: total, fluid, loads with"
+                             " load_response)")
         own = self.body_of_element == p
-        values = (self.total_traction if total else self.traction)[own]
+        values = kinds[kind][own]
         parent = self.parent_element[own]
         count = parent.max() + 1
         area = np.bincount(parent, self.areas[own], minlength=count)
@@ -140,7 +153,7 @@ def spread_point_loads(geometry, length: float, point_loads, n_bodies: int) -> n
 
 def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wall: bool = True,
                    forces=None, torques=None, device="cpu", *, extra_traction=None, point_loads=(),
-                   quadrature_order: int = 2,
+                   load_response: bool = False, quadrature_order: int = 2,
                    tolerance: float | None = None, max_iterations: int = 600, dtype: str = "float64",
                    operator: str = "auto", contact_refinement: float = 3.0) -> TractionSolution:
     """Traction on every rigid body (SI units) in the flow u = shear_rate z e_x (Pa s viscosity,
@@ -151,7 +164,8 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wal
     docstring): an (E, 3) array over the elements after contact refinement, or a function of
     the collocation points and their unit normals ((E, 3) each, m) that returns one;
     ``point_loads``: (body, point (m), force (N), contact radius (m)) each, spread as the module
-    docstring says (neither in ``forces``). Options as for ``solve_mobility``."""
+    docstring says (neither in ``forces``); ``load_response``: also solve the loads without the
+    flow (``load_traction``). Options as for ``solve_mobility``."""
     bodies = checked_bodies(bodies)
     shear_rate = _finite("shear_rate", shear_rate)
     viscosity = _finite("viscosity", viscosity, positive=True)
@@ -181,19 +195,23 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wal
     scale = scale if scale > 0 else 1.0
     adjoint = DoubleLayerOperator(geometry, wall, QuadratureOptions(order=quadrature_order), dtype, device,
                                   operator, kind="adjoint_double_layer")
-    modes, rhs = [], np.zeros(3 * geometry.n_elements)
-    # ambient traction sigma_inf . n, scaled
-    normals = geometry.collocation_normals
-    ambient = viscosity * shear_rate / scale * np.stack(
-        [normals[:, 2], np.zeros(len(normals)), normals[:, 0]], axis=1)
-    rhs += ambient.ravel()
+    modes, factors = [], []
     for p, rows in enumerate(ranges):
         raw = geometry.rigid_modes(p)
         factor = np.linalg.cholesky(raw.T @ (weights[rows, None] * raw))
-        phi = scipy.linalg.solve_triangular(factor, raw.T, lower=True).T  # <phi_k, phi_l> = delta_kl
-        modes.append(phi)
-        loads = np.concatenate([fluid_force[p] / (scale * length**2), fluid_torque[p] / (scale * length**3)])
-        rhs[rows] += phi @ scipy.linalg.solve_triangular(factor, loads, lower=True)
+        modes.append(scipy.linalg.solve_triangular(factor, raw.T, lower=True).T)  # <phi_k, phi_l> = delta_kl
+        factors.append(factor)
+    normals = geometry.collocation_normals
+
+    def right_hand_side(rate, force, torque):
+        """The ambient traction sigma_inf . n of the shear ``rate`` and the rigid modes' loads,
+        scaled."""
+        rhs = (viscosity * rate / scale * np.stack([normals[:, 2], np.zeros(len(normals)), normals[:, 0]],
+                                                    axis=1)).ravel()
+        for p, rows in enumerate(ranges):
+            loads = np.concatenate([force[p] / (scale * length**2), torque[p] / (scale * length**3)])
+            rhs[rows] += modes[p] @ scipy.linalg.solve_triangular(factors[p], loads, lower=True)
+        return rhs
 
     def matvec(t):
         out = adjoint.matvec(t)
@@ -202,9 +220,15 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wal
         return out
 
     size = 3 * geometry.n_elements
-    result = gmres(spla.LinearOperator((size, size), matvec=matvec, dtype=float), rhs,
-                   tolerance=DEFAULT_TOLERANCE[dtype] if tolerance is None else tolerance,
+    system = spla.LinearOperator((size, size), matvec=matvec, dtype=float)
+    tolerance = DEFAULT_TOLERANCE[dtype] if tolerance is None else tolerance
+    result = gmres(system, right_hand_side(shear_rate, fluid_force, fluid_torque), tolerance=tolerance,
                    max_iterations=max_iterations)
+    alone = None
+    if load_response:
+        response = gmres(system, right_hand_side(0.0, fluid_force, fluid_torque), tolerance=tolerance,
+                         max_iterations=max_iterations)
+        alone = response.solution.reshape(-1, 3) * scale + extra
     traction = result.solution.reshape(-1, 3) * scale
     areas = geometry.areas * length**2
     points = geometry.collocation * length
@@ -215,7 +239,7 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wal
         torque[p] = (areas[a:b, None] * np.cross(points[a:b] - bodies[p].position, traction[a:b])).sum(axis=0)
     weights = np.linalg.norm(geometry.qp_area_vectors, axis=-1)  # (E, Q), scaled
     loads = (result.solution.reshape(-1, 1, 3) * weights[..., None]).reshape(-1, 3)
-    return TractionSolution(traction, traction + extra, points, normals.copy(), areas, geometry.body_of_element.copy(),
+    return TractionSolution(traction, traction + extra, alone, points, normals.copy(), areas, geometry.body_of_element.copy(),
                             geometry.parent_element.copy(), force, torque,
                             result.iterations, result.residual, shear_rate, viscosity,
                             (adjoint, geometry.qp_positions.reshape(-1, 3), loads, length, scale))
