@@ -50,23 +50,24 @@ integrated effect (the surface moves by the jump within tau; spread over the ste
 stiff cell released undeformed at 1.9 % of its velocity in its first step). The rate at the end
 state, (u* - u) / tau, would miss the tank-treading slip of stiff cells (tried: a 0.5 kPa cell
 then drifted towards the wall as a rigid one). It lags the traction by a step (first order in
-dt). The flattening of a cell's own contact and bond loads is left out of the slip, as it is
+dt). The response to a cell's own loads is left out of the slip, as it is
 out of the gaps (below: contacts): with it, a cell pressed on the wall flattened by 5.7 nm in its
 first step, the slip of that flattening drove its centre towards the wall, and the contact law,
-which sees the gap without the flattening, answered with 1.3 uN. The traction of the target is
+which sees the gap without the flattening, answered with 1.3 uN. A cell released undeformed
+takes its shape in its first step, whose slip moves it then (a 0.5 kPa cell on the wall at
+1.45 x its velocity for that step only). The traction of the target is
 still the rigid shape's, the surface motion's own traction being what tau models.
 
-Adhesion (``forces/adhesion.py``). A deformable cell's receptors ride on its surface: each tip
-moves with the displacement of the surface point under it (the microvillus keeps its reference
-direction), and each bond's force acts at its tip (``ImplicitCoordinates.points``), spread like
-the contact loads. Below the elements, the Hertz patch of the bonds' normal force (thesis eq.
-4.9) still flattens the tips inside it (Johnson's surface displacement, as on the rigid cells
-with a Hertz patch): the mesh carries the cell's shape on its own scale (the fluid's strain, the
-overall response to the contact and bond loads), Hertz the contact below it, and the two add
-(the mesh's own flattening under a contact, a few nm at k = 4, against Hertz's tens of nm, is
-the overlap). Mobility snapshots (the adhesion's reuse of the flow solves on a lattice of
-heights) serve a state while max |u| stays within their tolerance (``keeps_shape``; 2 nm by
-default, the lattice's own spacing); a cell that deforms more is solved at every state.
+Adhesion (``forces/adhesion.py``). A deformable cell's receptors ride on its surface as the gaps
+see it (below: contacts): each tip moves with the displacement of the surface point under it
+(the microvillus keeps its reference direction), and each bond's force acts at its tip
+(``ImplicitCoordinates.points``), spread like the contact loads. Below the elements, the Hertz
+patch of the bonds' normal force (thesis eq. 4.9) still flattens the tips inside it (Johnson's
+surface displacement, as on the rigid cells with a Hertz patch): the mesh carries the cell's
+shape on its own scale, Hertz the contact below it. Mobility snapshots (the adhesion's reuse of
+the flow solves on a lattice of heights) serve a state while max |u| stays within their
+tolerance (``keeps_shape``; 2 nm by default, the lattice's own spacing); a cell that deforms
+more is solved at every state.
 
 ``update_interval`` = m > 1 re-solves the target every m-th step only and relaxes towards the
 kept one (body frame) in between (model no more than the scene needs: a slow, stiff cell).
@@ -86,15 +87,25 @@ the whole surface with its force and moment (``balanced``: the smooth stand-in f
 load). The film between close surfaces is in the fluid traction as far as the mesh resolves
 the gap; no lubrication formula is added on top (``forces/lubrication.py``).
 
-Contacts. The gaps the contact laws see (the repulsion of thesis eq. 3.1, the adhesion's reach)
-are measured on the cell without the flattening of its own contact and bond loads (``Contacts``
-``shapes``; the part ``contact_displacement``, the elastic response to those loads' tractions
-alone, balanced as above), while the flow and the receptors see the whole displacement. The
-contact's own compliance is the law's (eq. 3.1 is the steric spring of the roughness layers;
-the Hertz patch is below the elements): counted in the gap as well, and a step late, it closed
-a loop of gain ~ (inverse length of eq. 3.1) x (the flattening under the load), 2 /nm x 1-6 nm,
-which oscillated from step to step and, in a rolling 4 kPa cell at 320 pN, threw the contact
-force to 7 nN in one step (measured; README, "Where the deformable model fails").
+Contacts. The shape the contact laws see (the gaps of the repulsion of thesis eq. 3.1, the
+adhesion's reach and its receptor tips) and the slip above leave out the cell's response to its
+own loads: ``contact_displacement``, the elastic response to every load on the cell (contact
+and bond point loads, body loads) together with the fluid's answer to them, the traction of the
+loads acting without the flow (``solve_traction`` ``load_response``, one more GMRES solve on the
+same operator; computed while the cell has contact or bond loads). What remains is the shape
+the ambient flow gives the force-free cell: its strain, tank-treading and the lubrication film
+of the cells' approach in the flow (thesis ch. 3). The flow sees the whole displacement. The
+contact's own compliance is then the law's (eq. 3.1 is the steric spring of the roughness
+layers; the bond's spring; the Hertz patch below the elements). Counted in the gaps, it is
+explicit a step late and closes a loop of gain ~ (the law's stiffness) x (the cell's compliance
+under the load): (1) the load's own flattening, 2 /nm x 1-6 nm in the repulsion of a rolling
+4 kPa cell at 320 pN, threw its contact force to 7 nN in one step; (2) the fluid's answer to it
+(the film's pressure under a cell a load pulls or pushes, which deforms it as much as the load
+does), 0.1 N/m x ~400 m/N on a 0.5 kPa cell on stiff bonds (thesis fig. 4.3), threw that cell
+off its bonds within 0.8 ms (measured; README, "Where the deformable model fails"). Leaving out
+only (1) also counts the body loads' fluid answer without the contact that holds them (a cell
+pressed on the wall by 350 pN then saw its gap open by the film of a fall that does not happen),
+hence all loads together.
 
 Where it fails, and what the solver does there (measured: README, "Stability of deformable
 cells"). The displacement's amplitude, max |u| / a (a the equivalent radius), past
@@ -215,8 +226,9 @@ class Deformation(Interaction):
                                         (n, self.max_nodes, 3)),
                 "node_velocity": ("m/s (body frame: the displacement's rate over the last step)",
                                   (n, self.max_nodes, 3)),
-                "contact_displacement": ("m (body frame: the part of node_displacement from the contact and bond"
-                                         " loads, which the gaps leave out)", (n, self.max_nodes, 3)),
+                "contact_displacement": ("m (body frame: the part of node_displacement from the cell's own loads"
+                                         " with the fluid's answer to them, which the gaps leave out)",
+                                         (n, self.max_nodes, 3)),
                 "contact_target": ("m (body frame: that part of target_displacement)", (n, self.max_nodes, 3)),
                 "steps_since_solve": ("1 (steps since the target was solved; per body, all alike)", (n,)),
                 "orientation": ("1 (quaternion w, x, y, z of the shape measured)", (n, 4))}
@@ -319,8 +331,8 @@ class Deformation(Interaction):
     def _target(self, start_bodies, start_loads, point_loads):
         """(u*, its contact part) of every deformable body: the elastic balance of the start
         state's traction, the fluid's and the contact loads' (each spread over its Hertz patch,
-        ``solve_traction``); the contact part that of the contact loads' traction alone,
-        balanced by a traction linear over the surface (module docstring: contacts)."""
+        ``solve_traction``); the contact part that of the loads acting without the flow, with
+        the fluid's answer to them (module docstring: contacts)."""
         force, torque = start_loads.force.copy(), start_loads.torque.copy()
         spread = []
         for body, other, point, load in point_loads:  # these act on the surface, not as body loads
