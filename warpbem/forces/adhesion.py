@@ -224,8 +224,8 @@ class Adhesion(Interaction):
         moved by the displacement of the surface under them, for cells whose mesh at the state
         is a deformed one (``Deformation``; the microvillus keeps its reference direction). The
         adhesion passes the shapes the gaps are measured on (``Contacts.shapes``: without the
-        flattening of a cell's own contact and bond loads, which the bond's spring and the Hertz
-        patch carry; elastic/deformable.py, "Contacts")."""
+        cell's response to its own loads, the fluid's answer included, which the bond's spring
+        and the Hertz patch carry; elastic/deformable.py, "Contacts")."""
         tips = self.tips
         for c, b in enumerate(self.cells):
             if bodies[b].mesh is not self.meshes[b]:

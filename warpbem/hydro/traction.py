@@ -195,23 +195,19 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wal
     scale = scale if scale > 0 else 1.0
     adjoint = DoubleLayerOperator(geometry, wall, QuadratureOptions(order=quadrature_order), dtype, device,
                                   operator, kind="adjoint_double_layer")
-    modes, factors = [], []
+    # the right side in two parts, scaled: the ambient traction sigma_inf . n, and the rigid
+    # modes' loads (the loads acting alone, without the flow: ``load_response``)
+    normals = geometry.collocation_normals
+    ambient = (viscosity * shear_rate / scale * np.stack([normals[:, 2], np.zeros(len(normals)), normals[:, 0]],
+                                                          axis=1)).ravel()
+    modes, loads_rhs = [], np.zeros(3 * geometry.n_elements)
     for p, rows in enumerate(ranges):
         raw = geometry.rigid_modes(p)
         factor = np.linalg.cholesky(raw.T @ (weights[rows, None] * raw))
-        modes.append(scipy.linalg.solve_triangular(factor, raw.T, lower=True).T)  # <phi_k, phi_l> = delta_kl
-        factors.append(factor)
-    normals = geometry.collocation_normals
-
-    def right_hand_side(rate, force, torque):
-        """The ambient traction sigma_inf . n of the shear ``rate`` and the rigid modes' loads,
-        scaled."""
-        rhs = (viscosity * rate / scale * np.stack([normals[:, 2], np.zeros(len(normals)), normals[:, 0]],
-                                                    axis=1)).ravel()
-        for p, rows in enumerate(ranges):
-            loads = np.concatenate([force[p] / (scale * length**2), torque[p] / (scale * length**3)])
-            rhs[rows] += modes[p] @ scipy.linalg.solve_triangular(factors[p], loads, lower=True)
-        return rhs
+        phi = scipy.linalg.solve_triangular(factor, raw.T, lower=True).T  # <phi_k, phi_l> = delta_kl
+        modes.append(phi)
+        loads = np.concatenate([fluid_force[p] / (scale * length**2), fluid_torque[p] / (scale * length**3)])
+        loads_rhs[rows] = phi @ scipy.linalg.solve_triangular(factor, loads, lower=True)
 
     def matvec(t):
         out = adjoint.matvec(t)
@@ -222,12 +218,10 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wal
     size = 3 * geometry.n_elements
     system = spla.LinearOperator((size, size), matvec=matvec, dtype=float)
     tolerance = DEFAULT_TOLERANCE[dtype] if tolerance is None else tolerance
-    result = gmres(system, right_hand_side(shear_rate, fluid_force, fluid_torque), tolerance=tolerance,
-                   max_iterations=max_iterations)
+    result = gmres(system, ambient + loads_rhs, tolerance=tolerance, max_iterations=max_iterations)
     alone = None
     if load_response:
-        response = gmres(system, right_hand_side(0.0, fluid_force, fluid_torque), tolerance=tolerance,
-                         max_iterations=max_iterations)
+        response = gmres(system, loads_rhs, tolerance=tolerance, max_iterations=max_iterations)
         alone = response.solution.reshape(-1, 3) * scale + extra
     traction = result.solution.reshape(-1, 3) * scale
     areas = geometry.areas * length**2
