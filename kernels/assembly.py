@@ -49,6 +49,7 @@ from .elements import make_element_functions
 from .greens import make_green_functions
 
 
+DENSITY_ORDERS = (1, 2, 3)
 KINDS = ("double_layer", "adjoint_double_layer", "single_layer", "inverse_distance", "elastic_rotation",
          "elastic_dyadic")
 
@@ -62,7 +63,7 @@ def make_surface(dtype):
     class Surface:
         """Element data of all bodies (see warpbem/hydro/geometry.py) and the quadrature settings."""
 
-        poles: wp.array(dtype=vec3)  # collocation points, one per element
+        poles: wp.array(dtype=vec3)  # collocation points, p^2 per element, element by element
         pole_normals: wp.array(dtype=vec3)  # unit outward normals there
         nodes: wp.array(dtype=vec3)  # 9 per element
         centres: wp.array(dtype=vec3)
@@ -74,21 +75,35 @@ def make_surface(dtype):
         gauss_w: wp.array(dtype=dtype)
         duffy_x: wp.array(dtype=dtype)  # 1-D Gauss rule of the self element's Duffy triangles
         duffy_w: wp.array(dtype=dtype)
+        density_x: wp.array(dtype=dtype)  # the p collocation abscissae per direction (p = 1: 0)
+        qp_basis: wp.array(dtype=dtype)  # density basis at the regular Gauss points, (n_qp, p^2)
         near_factor: dtype
         max_level: int  # 0: no subdivision
-        body_start: wp.array(dtype=int)  # element range of each element's own body
+        body_start: wp.array(dtype=int)  # element range of the body of each collocation point
         body_end: wp.array(dtype=int)
 
     return Surface
 
 
 @functools.lru_cache(maxsize=None)
-def build_kernels(dtype, wall: bool, kind: str = "double_layer") -> SimpleNamespace:
+def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: int = 1) -> SimpleNamespace:
+    """The kernels of one integrand ``kind`` for a density of ``density_order`` p (module
+    docstring): p = 1 constant per element, p = 2, 3 Lagrange on p x p points per element."""
     if kind not in KINDS:
         raise ValueError(f"kernel kind must be one of {KINDS}, got {kind!r}")
+    if density_order not in DENSITY_ORDERS or (density_order > 1 and kind != "double_layer"):
+        raise ValueError(f"density order must be one of {DENSITY_ORDERS} (above 1 for the double layer only),"
+                         f" got {density_order!r} for {kind!r}")
     g = make_green_functions(dtype, wall)
     vec3, mat33 = g.vec3, g.mat33
     Surface = make_surface(dtype)
+    p = density_order
+    m = p * p  # density values (collocation points) per element
+    # the element integral of one pole: one 3x3 block per basis function, side by side
+    Block = mat33 if m == 1 else wp.types.matrix(shape=(3, 3 * m), dtype=dtype)
+    Stacked = vec3 if m == 1 else wp.types.vector(3 * m, dtype)  # an element's density values
+    Basis = wp.types.vector(m, dtype)
+    Line = wp.types.vector(p, dtype)
 
     quad9_point = make_element_functions(dtype).quad9_point
 
@@ -119,38 +134,96 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer") -> SimpleNamesp
 
     @wp.func
     def panel_needs_split(surf: Surface, element: int, s0: dtype, t0: dtype, h: dtype, pole: vec3):
+        # the panel's radius taken as the element's scaled by the panel's share of the parameter
+        # square (h / 2): exact for a flat parallelogram, and a fifth of the cost of measuring
+        # the corners, which was most of a small assembly
         half = dtype(0.5)
         c, unused = quad9_point(surf.nodes, element, s0 + half * h, t0 + half * h)
-        radius = dtype(0.0)
-        for corner in range(4):
-            cs = s0 + h * dtype(corner % 2)
-            ct = t0 + h * dtype(corner // 2)
-            p, unused2 = quad9_point(surf.nodes, element, cs, ct)
-            radius = wp.max(radius, wp.length(p - c))
-        return distance_to_pole(c, pole) < surf.near_factor * radius
+        return distance_to_pole(c, pole) < surf.near_factor * surf.radii[element] * half * h
+
+    @wp.func
+    def basis_at(surf: Surface, s: dtype, t: dtype):
+        """Lagrange basis of the density on the p x p points (density_x)^2, index i + p j."""
+        ls = Line()
+        lt = Line()
+        for i in range(p):
+            vs = dtype(1.0)
+            vt = dtype(1.0)
+            for k in range(p):
+                if k != i:
+                    d = surf.density_x[i] - surf.density_x[k]
+                    vs *= (s - surf.density_x[k]) / d
+                    vt *= (t - surf.density_x[k]) / d
+            ls[i] = vs
+            lt[i] = vt
+        b = Basis()
+        for j in range(p):
+            for i in range(p):
+                b[i + p * j] = ls[i] * lt[j]
+        return b
+
+    @wp.func
+    def weighted(k: mat33, b: Basis):
+        """[b_0 k | b_1 k | ...]: the kernel times each basis function."""
+        if wp.static(m == 1):
+            return k
+        out = Block()
+        for l in range(m):
+            for j in range(3):
+                for i in range(3):
+                    out[j, 3 * l + i] = b[l] * k[j, i]
+        return out
+
+    @wp.func
+    def block_sum(blocks: Block):
+        """Sum of the 3x3 blocks of all basis functions (the kernel times their sum, 1)."""
+        if wp.static(m == 1):
+            return blocks
+        out = mat33()
+        for l in range(m):
+            for j in range(3):
+                for i in range(3):
+                    out[j, i] += blocks[j, 3 * l + i]
+        return out
+
+    @wp.func
+    def stacked(density: wp.array(dtype=vec3), element: int):
+        """The p^2 density values of an element as one vector, in the order of the blocks."""
+        if wp.static(m == 1):
+            return density[element]
+        out = Stacked()
+        for l in range(m):
+            q = density[element * m + l]
+            for i in range(3):
+                out[3 * l + i] = q[i]
+        return out
 
     @wp.func
     def panel_integral(surf: Surface, element: int, s0: dtype, t0: dtype, h: dtype, pole: vec3, pole_normal: vec3):
         half_h = dtype(0.5) * h
-        acc = mat33()
+        acc = Block()
         n_gauss = surf.gauss_x.shape[0]
         for i in range(n_gauss):
             s = s0 + half_h * (surf.gauss_x[i] + dtype(1.0))
             for j in range(n_gauss):
                 t = t0 + half_h * (surf.gauss_x[j] + dtype(1.0))
                 x, area_vector = quad9_point(surf.nodes, element, s, t)
-                weighted = area_vector * (surf.gauss_w[i] * surf.gauss_w[j] * half_h * half_h)
-                acc += integrand(x, weighted, pole, pole_normal)
+                w = area_vector * (surf.gauss_w[i] * surf.gauss_w[j] * half_h * half_h)
+                acc += weighted(integrand(x, w, pole, pole_normal), basis_at(surf, s, t))
         return acc
 
     @wp.func
     def element_integral(surf: Surface, pole: vec3, pole_normal: vec3, element: int):
-        """Integral of the kernel over one element at one pole (see the module docstring)."""
-        acc = mat33()
+        """Integral of the kernel times each density basis function over one element at one
+        pole (see the module docstring)."""
+        acc = Block()
         if surf.max_level == 0 or distance_to_pole(surf.centres[element], pole) >= surf.near_factor * surf.radii[element]:
             for q in range(surf.n_qp):
                 k = element * surf.n_qp + q
-                acc += integrand(surf.qp_pos[k], surf.qp_area[k], pole, pole_normal)
+                b = Basis()
+                for l in range(m):
+                    b[l] = surf.qp_basis[q * m + l]
+                acc += weighted(integrand(surf.qp_pos[k], surf.qp_area[k], pole, pole_normal), b)
             return acc
         # stackless depth-first walk of the quadtree; children in order (0,0) (1,0) (0,1) (1,1)
         level = int(0)
@@ -180,12 +253,18 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer") -> SimpleNamesp
         return acc
 
     @wp.func
-    def self_integral(surf: Surface, element: int):
-        """The kernel over an element at its own collocation point (s = t = 0), by four Duffy
-        triangles (module docstring); for the weakly singular single layers."""
-        pole = surf.poles[element]
-        pole_normal = surf.pole_normals[element]
-        acc = mat33()
+    def own_element_integral(surf: Surface, point: int):
+        """The kernel times each basis function over the element of collocation point
+        ``point``, at that point (s_a, t_a), by four Duffy triangles (module docstring): for the
+        weakly singular single layers (p = 1, the centre), and for the double layer's other
+        basis functions of the same element (p > 1), whose product with the kernel is bounded."""
+        element = point // m
+        local = point - element * m
+        s_a = surf.density_x[local % p]
+        t_a = surf.density_x[local // p]
+        pole = surf.poles[point]
+        pole_normal = surf.pole_normals[point]
+        acc = Block()
         n_gauss = surf.duffy_x.shape[0]
         one = dtype(1.0)
         half = dtype(0.5)
@@ -193,49 +272,59 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer") -> SimpleNamesp
             # corners of the square, counter-clockwise: (-1,-1) (1,-1) (1,1) (-1,1)
             c1 = side
             c2 = (side + 1) % 4
-            s1 = dtype(2 * ((c1 + 1) // 2 % 2) - 1)
-            t1 = dtype(2 * (c1 // 2) - 1)
-            s2 = dtype(2 * ((c2 + 1) // 2 % 2) - 1)
-            t2 = dtype(2 * (c2 // 2) - 1)
+            s1 = dtype(2 * ((c1 + 1) // 2 % 2) - 1) - s_a
+            t1 = dtype(2 * (c1 // 2) - 1) - t_a
+            s2 = dtype(2 * ((c2 + 1) // 2 % 2) - 1) - s_a
+            t2 = dtype(2 * (c2 // 2) - 1) - t_a
             det = s1 * (t2 - t1) - t1 * (s2 - s1)
             for i in range(n_gauss):
                 u = half * (surf.duffy_x[i] + one)
                 for j in range(n_gauss):
                     v = half * (surf.duffy_x[j] + one)
-                    s = u * (s1 + v * (s2 - s1))
-                    t = u * (t1 + v * (t2 - t1))
+                    s = s_a + u * (s1 + v * (s2 - s1))
+                    t = t_a + u * (t1 + v * (t2 - t1))
                     x, area_vector = quad9_point(surf.nodes, element, s, t)
                     weight = surf.duffy_w[i] * surf.duffy_w[j] * dtype(0.25) * u * wp.abs(det)
-                    acc += integrand(x, area_vector * weight, pole, pole_normal)
+                    acc += weighted(integrand(x, area_vector * weight, pole, pole_normal), basis_at(surf, s, t))
+        if wp.static(m > 1):  # the pole's own basis function: from the identity, by the caller
+            for j in range(3):
+                for i in range(3):
+                    acc[j, 3 * local + i] = dtype(0.0)
         return acc
 
     @wp.kernel(enable_backward=False, module="unique")
     def self_blocks(row_offset: int, surf: Surface, out: wp.array(dtype=mat33)):
-        """out[a] = the kernel over element a at its own collocation point (single layers)."""
+        """out[a] = the kernel over element a at its own collocation point (single layers, p = 1)."""
         ia = wp.tid()
-        out[ia] = self_integral(surf, row_offset + ia)
+        out[ia] = block_sum(own_element_integral(surf, row_offset + ia))
 
     @wp.kernel(enable_backward=False, module="unique")
     def assemble_entries(row_offset: int, surf: Surface, rows: wp.array(dtype=int),
                          cols: wp.array(dtype=int), matrix: wp.array2d(dtype=dtype)):
-        """matrix[3a + j, 3b + i] = (I_ab)_ji for the elements a = rows[..] of this launch and
-        b = cols[..] (zero if a == b; the caller fills self blocks from the identity)."""
+        """matrix[3a + j, 3 (m b + l) + i] = the (j, i) entry of the integral of the kernel
+        times basis function l over element b at collocation point a, for the points a =
+        rows[..] of this launch and the elements b = cols[..]. The pole's own block is zero (the
+        caller fills it from the identity); the other basis functions of its own element come
+        from the Duffy rule (p > 1)."""
         ir, ic = wp.tid()
         a = rows[row_offset + ir]
         b = cols[ic]
-        m = mat33()
-        if a != b:
-            m = element_integral(surf, surf.poles[a], surf.pole_normals[a], b)
-        for j in range(3):
-            for i in range(3):
-                matrix[3 * a + j, 3 * b + i] = m[j, i]
+        blocks = Block()
+        if b != a // m:
+            blocks = element_integral(surf, surf.poles[a], surf.pole_normals[a], b)
+        elif wp.static(m > 1):
+            blocks = own_element_integral(surf, a)
+        for l in range(m):
+            for j in range(3):
+                for i in range(3):
+                    matrix[3 * a + j, 3 * (m * b + l) + i] = blocks[j, 3 * l + i]
 
     @wp.kernel(enable_backward=False, module="unique")
     def gather_entries(row_offset: int, src: wp.array2d(dtype=dtype), src_rows: wp.array(dtype=int),
                        src_cols: wp.array(dtype=int), dst: wp.array2d(dtype=dtype),
                        dst_rows: wp.array(dtype=int), dst_cols: wp.array(dtype=int)):
-        """Copy the 3x3 blocks of element pairs from an earlier matrix (same pairs, new places):
-        the blocks between bodies that did not move since they were assembled."""
+        """Copy the 3x3 blocks of collocation point pairs from an earlier matrix (same pairs, new
+        places): the blocks between bodies that did not move since they were assembled."""
         ir, ic = wp.tid()
         r = row_offset + ir
         for j in range(3):
@@ -245,24 +334,31 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer") -> SimpleNamesp
     @wp.kernel(enable_backward=False, module="unique")
     def apply_matrix_free(row_offset: int, surf: Surface, diagonal: wp.array(dtype=mat33),
                           density: wp.array(dtype=vec3), out: wp.array(dtype=vec3)):
-        """out[a] = sum_{b != a} I_ab density[b] + diagonal[a] density[a] (rows of this block)."""
+        """out[a] = sum over the elements b of their blocks at a times b's density values, and
+        diagonal[a] density[a] (rows of this block; the layout of ``assemble_entries``)."""
         ia = wp.tid()
         a = row_offset + ia
         acc = diagonal[a] * density[a]
-        for b in range(surf.poles.shape[0]):
-            if b != a:
-                acc += element_integral(surf, surf.poles[a], surf.pole_normals[a], b) * density[b]
+        own = a // m
+        for b in range(surf.centres.shape[0]):
+            if b != own:
+                acc += element_integral(surf, surf.poles[a], surf.pole_normals[a], b) * stacked(density, b)
+            elif wp.static(m > 1):
+                acc += own_element_integral(surf, a) * stacked(density, b)
         out[ia] = acc
 
     @wp.kernel(enable_backward=False, module="unique")
     def same_body_row_sums(row_offset: int, surf: Surface, out: wp.array(dtype=mat33)):
-        """out[a] = sum over the other elements b of a's own body of I_ab."""
+        """out[a] = sum over a's own body of the blocks at collocation point a but its own."""
         ia = wp.tid()
         a = row_offset + ia
         acc = mat33()
+        own = a // m
         for b in range(surf.body_start[a], surf.body_end[a]):
-            if b != a:
-                acc += element_integral(surf, surf.poles[a], surf.pole_normals[a], b)
+            if b != own:
+                acc += block_sum(element_integral(surf, surf.poles[a], surf.pole_normals[a], b))
+            elif wp.static(m > 1):
+                acc += block_sum(own_element_integral(surf, a))
         out[ia] = acc
 
     @wp.kernel(enable_backward=False, module="unique")
@@ -278,6 +374,14 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer") -> SimpleNamesp
         for p in range(poles.shape[0]):
             acc += g.stokeslet(x, vec3(), poles[p]) * forces[p]
         out[it] = acc
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def point_force_tensors(row_offset: int, targets: wp.array(dtype=vec3), poles: wp.array(dtype=vec3),
+                            out: wp.array2d(dtype=mat33)):
+        """out[t, p] = G(target_t, pole_p): the velocity (times viscosity) per point force, for
+        several load cases on the same poles (a fixed body's six unit loads)."""
+        it, ip = wp.tid()
+        out[it, ip] = g.stokeslet(targets[row_offset + it], vec3(), poles[ip])
 
     @wp.kernel(enable_backward=False, module="unique")
     def dense_matvec(matrix: wp.array2d(dtype=dtype), x: wp.array(dtype=dtype), out: wp.array(dtype=dtype)):
@@ -298,5 +402,6 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer") -> SimpleNamesp
         same_body_row_sums=same_body_row_sums,
         self_blocks=self_blocks,
         point_force_velocity=point_force_velocity,
+        point_force_tensors=point_force_tensors,
         quad9_point=quad9_point,
     )

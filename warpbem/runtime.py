@@ -94,15 +94,16 @@ def row_blocks(n_rows: int, device) -> list[tuple[int, int]]:
     return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]) if b > a]
 
 
-def launch_rows(kernel, n_rows: int, make_inputs, device, extra_dim: int | None = None):
+def launch_rows(kernel, n_rows: int, make_inputs, device, extra_dim: int | None = None, threaded: bool = True):
     """Launch ``kernel`` over ``n_rows`` rows split in blocks.
 
     ``make_inputs(start, stop)`` returns the input list of one block (its first entry is the
     row offset ``start``); blocks run concurrently on CPU threads. ``extra_dim`` makes the
-    launch two-dimensional (rows x extra_dim).
+    launch two-dimensional (rows x extra_dim). ``threaded=False``: one launch, for work too
+    light to pay for the thread pool's hand-offs.
     """
     wp = init()
-    blocks = row_blocks(n_rows, device)
+    blocks = row_blocks(n_rows, device) if threaded else [(0, n_rows)]
 
     def run(block):
         start, stop = block

@@ -55,7 +55,7 @@ from ..surfaces.placement import check_placement
 from ..surfaces.refinement import WALL
 from .geometry import SurfaceGeometry
 from .linalg import gmres
-from .operators import DoubleLayerOperator, QuadratureOptions
+from .operators import DENSITY_ORDERS, DoubleLayerOperator, QuadratureOptions
 
 
 class ContactResolutionWarning(UserWarning):
@@ -158,10 +158,10 @@ class CompletedDoubleLayer:
         self.operator = operator
         self.fixed = np.asarray(fixed, dtype=bool)
         self.fixed_index = np.cumsum(self.fixed) - 1
-        self.size = 3 * geometry.n_elements
+        self.size = 3 * geometry.n_points
         self.ranges = [slice(3 * a, 3 * b) for a, b in geometry.body_ranges]
         self.weights = np.repeat(geometry.areas, 3)
-        self.free_dofs = np.repeat(~self.fixed[geometry.body_of_element], 3).astype(float)
+        self.free_dofs = np.repeat(~self.fixed[geometry.body_of_point], 3).astype(float)
         self.modes, self.cholesky = [], []
         for p, rows in enumerate(self.ranges):
             raw = geometry.rigid_modes(p)
@@ -182,39 +182,40 @@ class CompletedDoubleLayer:
             self.load_per_coefficient[k : k + 6] = 1.0 / np.diag(response)
 
     def completion(self, body: int, loads: np.ndarray):
-        """Poles (7, 3) and point forces (7, 3) of body p's completion for scaled (F, T)."""
+        """Poles (7, 3) and point forces (..., 7, 3) of body p's completion for scaled loads
+        (F, T) of shape (..., 6): one load case or several."""
         start, stop = self.geometry.body_ranges[body]
         centre = self.geometry.centres[body]
         d = 0.25 * np.linalg.norm(self.geometry.collocation[start:stop] - centre, axis=1).min()
         e = np.eye(3)
         poles = np.concatenate([centre[None], centre + d * e, centre - d * e])
-        couple = np.cross(loads[3:], e) / (4.0 * d)  # (T x e_l) / (4 d), row l
-        return poles, np.concatenate([loads[None, :3], couple, -couple])
+        loads = np.asarray(loads, dtype=float)
+        couple = np.cross(loads[..., None, 3:], e) / (4.0 * d)  # (T x e_l) / (4 d), row l
+        return poles, np.concatenate([loads[..., None, :3], couple, -couple], axis=-2)
 
     def _fixed_body_columns(self, previous) -> np.ndarray:
         """Velocity at every collocation point of the six unit loads of each fixed body; the
         rows of bodies that did not move are copied from ``previous`` when the fixed body did
         not move either."""
         columns = np.zeros((self.size, 6 * int(self.fixed.sum())))
-        all_rows = np.arange(self.geometry.n_elements)
+        all_rows = np.arange(self.geometry.n_points)
         for p in np.flatnonzero(self.fixed):
             k = 6 * self.fixed_index[p]
             targets = all_rows
             if previous is not None and self.unchanged[p] and previous.fixed[p]:
                 kept = np.flatnonzero(self.unchanged)
-                old_rows = dof_indices(previous.geometry.elements_of(kept))
+                old_rows = dof_indices(previous.geometry.points_of(kept))
                 old_k = 6 * previous.fixed_index[p]
-                columns[dof_indices(self.geometry.elements_of(kept)), k : k + 6] = \
+                columns[dof_indices(self.geometry.points_of(kept)), k : k + 6] = \
                     previous.fixed_columns[old_rows, old_k : old_k + 6]
-                targets = self.geometry.elements_of(np.flatnonzero(~self.unchanged))
+                targets = self.geometry.points_of(np.flatnonzero(~self.unchanged))
             if len(targets) == 0:
                 continue
-            for load in range(6):
-                unit = np.zeros(6)
-                unit[load] = FORCE_UNIT if load < 3 else TORQUE_UNIT
-                poles, forces = self.completion(p, unit)
-                velocity = self.operator.point_force_velocity(self.geometry.collocation[targets], poles, forces)
-                columns[dof_indices(targets), k + load] = velocity.ravel()
+            units = np.diag([FORCE_UNIT] * 3 + [TORQUE_UNIT] * 3)
+            poles, point_forces = self.completion(p, units)  # point_forces: (load, pole, 3)
+            tensors = self.operator.point_force_tensors(self.geometry.collocation[targets], poles)
+            velocity = np.einsum("tpij,lpj->til", tensors, point_forces)
+            columns[dof_indices(targets), k : k + 6] = velocity.reshape(-1, 6)
         return columns
 
     def initial_guess(self, previous: "CompletedDoubleLayer", solution: np.ndarray) -> np.ndarray:
@@ -287,18 +288,22 @@ class CompletedDoubleLayer:
                   if not kept[p] and (self.fixed[p] or rows.stop - rows.start <= FACTOR_LIMIT)]
         blocks = self.operator.diagonal_blocks(needed)
         self.factors = [old[p] if kept[p] else
-                        scipy.linalg.lu_factor(self.body_block(p, blocks[p])) if p in blocks else None
+                        scipy.linalg.lu_factor(self.body_block(p, blocks[p]), check_finite=False) if p in blocks else None
                         for p in range(len(self.ranges))]
 
         def apply(r):
             out = r.copy()
             for rows, factor in zip(self.ranges, self.factors):
                 if factor is not None:
-                    out[rows] = scipy.linalg.lu_solve(factor, r[rows])
+                    out[rows] = scipy.linalg.lu_solve(factor, r[rows], check_finite=False)
             return out
 
         self._block_jacobi = spla.LinearOperator((self.size, self.size), matvec=apply, dtype=np.float64)
         return self._block_jacobi
+
+    def preconditioner_is_exact(self) -> bool:
+        """One body with its block factored: block Jacobi is then the inverse of the system."""
+        return len(self.ranges) == 1 and self.factors is not None and self.factors[0] is not None
 
     def rigid_velocity(self, body: int, x: np.ndarray) -> np.ndarray:
         """(U, Omega) of a free body in scaled units: the rigid field -P_p q."""
@@ -322,7 +327,7 @@ class MobilitySolver:
                  quadrature_order: int = 2, adaptive_quadrature: bool = True, tolerance: float | None = None,
                  max_iterations: int = 600, dtype: str = "float64", operator: str = "auto",
                  contact_refinement: float = 3.0, refine_fixed_at_wall: bool = True, reuse: bool = True,
-                 precondition: bool = True):
+                 precondition: bool = True, density_order: int = 1):
         self.shear_rate = _finite("shear_rate", shear_rate)
         self.viscosity = _finite("viscosity", viscosity, positive=True)
         self.wall = bool(wall)
@@ -337,6 +342,9 @@ class MobilitySolver:
         self.contact_refinement = _finite("contact_refinement", contact_refinement)
         self.refine_fixed_at_wall = bool(refine_fixed_at_wall)
         self.precondition = bool(precondition)
+        if density_order not in DENSITY_ORDERS:
+            raise ValueError(f"density_order must be one of {DENSITY_ORDERS}, got {density_order!r}")
+        self.density_order = int(density_order)
         self.reuse = bool(reuse)
         self._last = None  # (CompletedDoubleLayer, solution vector, speed, bodies key) of the previous solve
         self._warned = set()  # contacts already reported by this solver
@@ -377,7 +385,8 @@ class MobilitySolver:
             geometry, double_layer = system.geometry, system.operator
         else:
             geometry = SurfaceGeometry.from_bodies(bodies, self.quadrature.order, length, self.wall,
-                                                   self.contact_refinement, self.refine_fixed_at_wall)
+                                                   self.contact_refinement, self.refine_fixed_at_wall,
+                                                   self.density_order)
             self._warn_unresolved(geometry, length)
             double_layer = DoubleLayerOperator(geometry, self.wall, self.quadrature, self.dtype, self.device,
                                                self.operator, reuse=previous.operator if previous else None)
@@ -411,9 +420,10 @@ class MobilitySolver:
         if initial_guess is None and previous is not None and background:
             # the previous solution is in the previous scaling: rescale the loads part with it
             initial_guess = system.initial_guess(previous, self._last[1] * (self._last[2] / speed))
+        preconditioner = system.preconditioner(previous) if self.precondition else None
         result = gmres(system.linear_operator(), rhs, tolerance=self.tolerance,
                        max_iterations=self.max_iterations, initial_guess=initial_guess,
-                       preconditioner=system.preconditioner(previous) if self.precondition else None)
+                       preconditioner=preconditioner, exact_preconditioner=system.preconditioner_is_exact())
         x = result.solution
         if background or self._last is None or system is not self._last[0]:
             self._last = (system, x, speed, key)
@@ -471,6 +481,7 @@ def solve_mobility(
     operator: str = "auto",
     initial_guess=None,
     contact_refinement: float = 3.0,
+    density_order: int = 1,
 ) -> MobilitySolution:
     """Rigid velocities of free bodies and holding loads of fixed ones (SI units), one solve.
 
@@ -486,5 +497,5 @@ def solve_mobility(
     solver = MobilitySolver(shear_rate, viscosity, wall, device, quadrature_order=quadrature_order,
                             adaptive_quadrature=adaptive_quadrature, tolerance=tolerance,
                             max_iterations=max_iterations, dtype=dtype, operator=operator,
-                            contact_refinement=contact_refinement, reuse=False)
+                            contact_refinement=contact_refinement, reuse=False, density_order=density_order)
     return solver.solve(bodies, forces, torques, initial_guess)

@@ -63,6 +63,7 @@ class QuadratureOptions:
 
 
 OPERATOR_MODES = ("auto", "dense", "matrix_free")
+DENSITY_ORDERS = (1, 2, 3)  # collocation points per direction on an element (kernels/assembly.py)
 SINGLE_LAYERS = ("single_layer", "inverse_distance")
 # kinds whose self block follows from the rigid-translation identity of their own row sums
 IDENTITY_KINDS = ("double_layer", "elastic_rotation", "elastic_dyadic")
@@ -87,12 +88,12 @@ class DoubleLayerOperator:
         self.dtype_name = dtype
         self.np_dtype = np.float64 if dtype == "float64" else np.float32
         self.kind = kind
-        self.kernels = build_kernels(runtime.dtype_of(dtype), bool(wall), kind)
+        self.kernels = build_kernels(runtime.dtype_of(dtype), bool(wall), kind, geometry.density_order)
         # the self blocks are the double layer's in either kind (module docstring)
         self.self_block_kernels = build_kernels(runtime.dtype_of(dtype), bool(wall))
         self.geometry = geometry
         self.quadrature = quadrature
-        self.size = 3 * geometry.n_elements
+        self.size = 3 * geometry.n_points
         self.surface = geometry.to_device(self.kernels, quadrature, self.device)
         matrix_bytes = self.size**2 * np.dtype(self.np_dtype).itemsize
         if dense_memory_limit is None:  # "auto": assemble while the matrix fits in half the free memory
@@ -122,20 +123,21 @@ class DoubleLayerOperator:
         matrix = wp.empty((self.size, self.size), dtype=self.kernels.green.dtype, device=self.device)
         kept = np.flatnonzero(self.reused_bodies)
         moved = np.flatnonzero(~self.reused_bodies)
-        kept_rows = self.geometry.elements_of(kept)
-        moved_rows = self.geometry.elements_of(moved)
+        kept_rows = self.geometry.points_of(kept)
+        moved_rows = self.geometry.points_of(moved)
 
         def indices(a):
             return wp.array(np.ascontiguousarray(a, dtype=np.int32), dtype=int, device=self.device)
 
         if len(kept_rows):
-            src = indices(self._previous.geometry.elements_of(kept))
+            src = indices(self._previous.geometry.points_of(kept))
             dst = indices(kept_rows)
             old = self._previous.assemble()
             runtime.launch_rows(self.kernels.gather_entries, len(kept_rows),
                                 lambda start, stop: [start, old, src, src, matrix, dst, dst],
                                 self.device, extra_dim=len(kept_rows))
-        for rows, cols in ((moved_rows, np.arange(self.geometry.n_elements)), (kept_rows, moved_rows)):
+        # rows: collocation points; columns: elements, each filling the columns of its points
+        for rows, cols in ((moved_rows, np.arange(self.geometry.n_elements)), (kept_rows, self.geometry.elements_of(moved))):
             if len(rows) and len(cols):
                 r, c = indices(rows), indices(cols)
                 runtime.launch_rows(self.kernels.assemble_entries, len(rows),
@@ -143,7 +145,7 @@ class DoubleLayerOperator:
                                     self.device, extra_dim=len(cols))
         host = matrix.numpy() if self.device.is_cpu else matrix.numpy().copy()
         if self.kind not in IDENTITY_KINDS:  # self blocks: the double layer's rows sums, or Duffy's
-            a = self.geometry.elements_of(moved)[:, None, None]
+            a = self.geometry.points_of(moved)[:, None, None]
             k = np.arange(3)
             host[3 * a + k[None, :, None], 3 * a + k[None, None, :]] = self._self_blocks().numpy()[a[:, 0, 0]]
             moved = []
@@ -184,7 +186,7 @@ class DoubleLayerOperator:
         of the same body) of the double layer; for the single layers the Duffy integral."""
         if self._diagonal is None:
             wp = self._wp
-            n = self.geometry.n_elements
+            n = self.geometry.n_points
             blocks = wp.zeros(n, dtype=self.kernels.green.mat33, device=self.device)
             singular = self.kind in SINGLE_LAYERS
             own = self.kernels if self.kind in IDENTITY_KINDS else self.self_block_kernels
@@ -207,7 +209,7 @@ class DoubleLayerOperator:
             wp.launch(self.kernels.dense_matvec, dim=self.size, inputs=[matrix, x, out], device=self.device)
             return out.numpy().astype(np.float64)
         diagonal = self._self_blocks()
-        n = self.geometry.n_elements
+        n = self.geometry.n_points
         vec3 = self.kernels.green.vec3
         q = wp.array(density.reshape(n, 3), dtype=vec3, device=self.device)
         out = wp.zeros(n, dtype=vec3, device=self.device)
@@ -217,6 +219,20 @@ class DoubleLayerOperator:
             self.device,
         )
         return out.numpy().reshape(-1).astype(np.float64)
+
+    def point_force_tensors(self, targets: np.ndarray, poles: np.ndarray) -> np.ndarray:
+        """(T, P, 3, 3) Green's tensors G(target, pole) (scaled units, viscosity 1): the
+        velocities of several load cases on the same few poles from one launch."""
+        wp = self._wp
+        vec3 = self.kernels.green.vec3
+        t = wp.array(np.ascontiguousarray(targets), dtype=vec3, device=self.device)
+        p = wp.array(np.ascontiguousarray(poles), dtype=vec3, device=self.device)
+        out = wp.empty((len(targets), len(poles)), dtype=self.kernels.green.mat33, device=self.device)
+        # a few poles: light work, not worth the thread pool below some thousand targets
+        runtime.launch_rows(self.kernels.point_force_tensors, len(targets),
+                            lambda start, stop: [start, t, p, out[start:stop]], self.device, extra_dim=len(poles),
+                            threaded=len(targets) * len(poles) > 20000)
+        return out.numpy().astype(np.float64)
 
     def point_force_velocity(self, targets: np.ndarray, poles: np.ndarray, forces: np.ndarray) -> np.ndarray:
         """sum_p G(target, pole_p) force_p at every target (scaled units, viscosity 1)."""

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from . import quad9
+from .placement import winding_number
 
 
 class MeshError(ValueError):
@@ -78,8 +79,18 @@ class Mesh:
         return moments / self.volume(order)
 
     def equivalent_radius(self) -> float:
-        """Radius of the sphere of the same volume."""
-        return float((3.0 * self.volume() / (4.0 * np.pi)) ** (1.0 / 3.0))
+        """Radius of the sphere of the same volume (remembered: a Mesh is immutable)."""
+        if getattr(self, "_equivalent_radius", None) is None:
+            object.__setattr__(self, "_equivalent_radius", float((3.0 * self.volume() / (4.0 * np.pi)) ** (1.0 / 3.0)))
+        return self._equivalent_radius
+
+    def encloses_origin(self) -> bool:
+        """Whether the reference point (the origin of the mesh coordinates) lies inside the
+        surface, by its winding number; remembered, since a rigid motion of the body moves its
+        reference point with it."""
+        if getattr(self, "_encloses_origin", None) is None:
+            object.__setattr__(self, "_encloses_origin", bool(winding_number(np.zeros((1, 3)), self.element_nodes())[0] >= 0.5))
+        return self._encloses_origin
 
     def size(self) -> float:
         """Largest distance of a node from the reference point (the origin)."""

@@ -67,7 +67,7 @@ def check_placement(bodies, wall: bool) -> None:
     element_nodes = [b.world_nodes()[b.mesh.elements] for b in bodies]
     samples = [_surface_samples(e) for e in element_nodes]
     for i, body in enumerate(bodies):
-        if winding_number(body.position[None], element_nodes[i])[0] < 0.5:
+        if not body.mesh.encloses_origin():
             raise PlacementError(
                 f"body {i}: its reference point (position) lies outside its mesh; the mesh"
                 " coordinates must be given about a point inside the body"

@@ -15,6 +15,8 @@ The device copy of the same map (with second derivatives) is ``kernels/elements.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 REFERENCE_NODES = np.array(
@@ -41,13 +43,37 @@ def shape_functions(s, t):
     return ls[..., i] * lt[..., j], dls[..., i] * lt[..., j], ls[..., i] * dlt[..., j]
 
 
+def _read_only(*arrays):
+    for a in arrays:
+        a.flags.writeable = False
+    return arrays
+
+
+@functools.lru_cache(maxsize=None)
+def gauss_legendre(order: int):
+    """1-D Gauss-Legendre rule on [-1, 1], points and weights (cached: NumPy's eigenvalue
+    computation of it took a tenth of a small solve)."""
+    return _read_only(*np.polynomial.legendre.leggauss(order))
+
+
 def gauss_legendre_square(order: int):
     """Tensor Gauss-Legendre rule on [-1, 1]^2: points (order^2, 2) and weights (order^2,)."""
     if int(order) != order or order < 1:
         raise ValueError(f"quadrature order must be a positive integer, got {order!r}")
-    x, w = np.polynomial.legendre.leggauss(int(order))
+    return _square_rule(int(order))
+
+
+@functools.lru_cache(maxsize=None)
+def _square_rule(order: int):
+    x, w = gauss_legendre(order)
     s, t = np.meshgrid(x, x, indexing="ij")
-    return np.stack([s.ravel(), t.ravel()], axis=1), np.outer(w, w).ravel()
+    return _read_only(np.stack([s.ravel(), t.ravel()], axis=1), np.outer(w, w).ravel())
+
+
+@functools.lru_cache(maxsize=None)
+def _shapes_at_gauss_points(order: int):
+    points, weights = gauss_legendre_square(order)
+    return _read_only(*shape_functions(points[:, 0], points[:, 1]), weights)
 
 
 def surface_quadrature(element_nodes: np.ndarray, order: int):
@@ -57,8 +83,9 @@ def surface_quadrature(element_nodes: np.ndarray, order: int):
     the latter equal to w_q (x_s x x_t): the outward normal times the surface Jacobian times
     the Gauss weight, so that sum_q f(x_q) |a_q| approximates the surface integral of f.
     """
-    points, weights = gauss_legendre_square(order)
-    n, ns, nt = shape_functions(points[:, 0], points[:, 1])
+    if int(order) != order or order < 1:
+        raise ValueError(f"quadrature order must be a positive integer, got {order!r}")
+    n, ns, nt, weights = _shapes_at_gauss_points(int(order))
     positions = np.einsum("qa,eai->eqi", n, element_nodes)
     x_s = np.einsum("qa,eai->eqi", ns, element_nodes)
     x_t = np.einsum("qa,eai->eqi", nt, element_nodes)
