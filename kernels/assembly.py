@@ -55,9 +55,11 @@ KINDS = ("double_layer", "adjoint_double_layer", "single_layer", "inverse_distan
 
 
 @functools.lru_cache(maxsize=None)
-def make_surface(dtype):
-    """The ``Surface`` struct, shared by the kernels of every kind for one precision."""
+def make_surface(dtype, points_per_element: int = 1):
+    """The ``Surface`` struct, shared by the kernels of every kind for one precision and
+    number of density values per element."""
     vec3 = wp.types.vector(3, dtype)
+    m = points_per_element
 
     @wp.struct
     class Surface:
@@ -76,7 +78,7 @@ def make_surface(dtype):
         duffy_x: wp.array(dtype=dtype)  # 1-D Gauss rule of the self element's Duffy triangles
         duffy_w: wp.array(dtype=dtype)
         density_x: wp.array(dtype=dtype)  # the p collocation abscissae per direction (p = 1: 0)
-        qp_basis: wp.array(dtype=dtype)  # density basis at the regular Gauss points, (n_qp, p^2)
+        qp_basis: wp.array(dtype=wp.types.vector(m, dtype))  # density basis at the regular Gauss points
         near_factor: dtype
         max_level: int  # 0: no subdivision
         body_start: wp.array(dtype=int)  # element range of the body of each collocation point
@@ -96,12 +98,14 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
                          f" got {density_order!r} for {kind!r}")
     g = make_green_functions(dtype, wall)
     vec3, mat33 = g.vec3, g.mat33
-    Surface = make_surface(dtype)
     p = density_order
     m = p * p  # density values (collocation points) per element
-    # the element integral of one pole: one 3x3 block per basis function, side by side
-    Block = mat33 if m == 1 else wp.types.matrix(shape=(3, 3 * m), dtype=dtype)
-    Stacked = vec3 if m == 1 else wp.types.vector(3 * m, dtype)  # an element's density values
+    Surface = make_surface(dtype, m)
+    # The element integral at one pole is one 3x3 block per basis function l, kept as three
+    # (3, m) parts, part i holding column i of every block: [K_l]_{j i} = part_i[j, l]. Each
+    # quadrature point then adds three outer products; a single (3, 3 m) matrix filled entry by
+    # entry took twice as long (every entry written copies the whole matrix in Warp's code).
+    Part = wp.types.matrix(shape=(3, m), dtype=dtype)
     Basis = wp.types.vector(m, dtype)
     Line = wp.types.vector(p, dtype)
 
@@ -164,44 +168,37 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
 
     @wp.func
     def weighted(k: mat33, b: Basis):
-        """[b_0 k | b_1 k | ...]: the kernel times each basis function."""
-        if wp.static(m == 1):
-            return k
-        out = Block()
-        for l in range(m):
-            for j in range(3):
-                for i in range(3):
-                    out[j, 3 * l + i] = b[l] * k[j, i]
-        return out
+        """The kernel times each basis function, as the three parts (see Part above)."""
+        kt = wp.transpose(k)  # row i: column i of k
+        return wp.outer(kt[0], b), wp.outer(kt[1], b), wp.outer(kt[2], b)
 
     @wp.func
-    def block_sum(blocks: Block):
+    def block_sum(p0: Part, p1: Part, p2: Part):
         """Sum of the 3x3 blocks of all basis functions (the kernel times their sum, 1)."""
-        if wp.static(m == 1):
-            return blocks
-        out = mat33()
+        ones = Basis()
         for l in range(m):
-            for j in range(3):
-                for i in range(3):
-                    out[j, i] += blocks[j, 3 * l + i]
-        return out
+            ones[l] = dtype(1.0)
+        return wp.matrix_from_cols(p0 * ones, p1 * ones, p2 * ones)
 
     @wp.func
-    def stacked(density: wp.array(dtype=vec3), element: int):
-        """The p^2 density values of an element as one vector, in the order of the blocks."""
-        if wp.static(m == 1):
-            return density[element]
-        out = Stacked()
+    def apply_parts(p0: Part, p1: Part, p2: Part, density: wp.array(dtype=vec3), element: int):
+        """sum over the basis functions l of K_l times the element's density value l."""
+        q0 = Basis()
+        q1 = Basis()
+        q2 = Basis()
         for l in range(m):
             q = density[element * m + l]
-            for i in range(3):
-                out[3 * l + i] = q[i]
-        return out
+            q0[l] = q[0]
+            q1[l] = q[1]
+            q2[l] = q[2]
+        return p0 * q0 + p1 * q1 + p2 * q2
 
     @wp.func
     def panel_integral(surf: Surface, element: int, s0: dtype, t0: dtype, h: dtype, pole: vec3, pole_normal: vec3):
         half_h = dtype(0.5) * h
-        acc = Block()
+        p0 = Part()
+        p1 = Part()
+        p2 = Part()
         n_gauss = surf.gauss_x.shape[0]
         for i in range(n_gauss):
             s = s0 + half_h * (surf.gauss_x[i] + dtype(1.0))
@@ -209,22 +206,27 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
                 t = t0 + half_h * (surf.gauss_x[j] + dtype(1.0))
                 x, area_vector = quad9_point(surf.nodes, element, s, t)
                 w = area_vector * (surf.gauss_w[i] * surf.gauss_w[j] * half_h * half_h)
-                acc += weighted(integrand(x, w, pole, pole_normal), basis_at(surf, s, t))
-        return acc
+                w0, w1, w2 = weighted(integrand(x, w, pole, pole_normal), basis_at(surf, s, t))
+                p0 += w0
+                p1 += w1
+                p2 += w2
+        return p0, p1, p2
 
     @wp.func
     def element_integral(surf: Surface, pole: vec3, pole_normal: vec3, element: int):
         """Integral of the kernel times each density basis function over one element at one
         pole (see the module docstring)."""
-        acc = Block()
+        p0 = Part()
+        p1 = Part()
+        p2 = Part()
         if surf.max_level == 0 or distance_to_pole(surf.centres[element], pole) >= surf.near_factor * surf.radii[element]:
             for q in range(surf.n_qp):
                 k = element * surf.n_qp + q
-                b = Basis()
-                for l in range(m):
-                    b[l] = surf.qp_basis[q * m + l]
-                acc += weighted(integrand(surf.qp_pos[k], surf.qp_area[k], pole, pole_normal), b)
-            return acc
+                w0, w1, w2 = weighted(integrand(surf.qp_pos[k], surf.qp_area[k], pole, pole_normal), surf.qp_basis[q])
+                p0 += w0
+                p1 += w1
+                p2 += w2
+            return p0, p1, p2
         # stackless depth-first walk of the quadtree; children in order (0,0) (1,0) (0,1) (1,1)
         level = int(0)
         ix = int(0)
@@ -238,7 +240,10 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
                 ix = 2 * ix
                 iy = 2 * iy
                 continue
-            acc += panel_integral(surf, element, s0, t0, h, pole, pole_normal)
+            w0, w1, w2 = panel_integral(surf, element, s0, t0, h, pole, pole_normal)
+            p0 += w0
+            p1 += w1
+            p2 += w2
             while level > 0 and (ix & 1) == 1 and (iy & 1) == 1:
                 level -= 1
                 ix = ix >> 1
@@ -250,7 +255,7 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
             else:
                 ix -= 1
                 iy += 1
-        return acc
+        return p0, p1, p2
 
     @wp.func
     def own_element_integral(surf: Surface, point: int):
@@ -264,7 +269,9 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
         t_a = surf.density_x[local // p]
         pole = surf.poles[point]
         pole_normal = surf.pole_normals[point]
-        acc = Block()
+        p0 = Part()
+        p1 = Part()
+        p2 = Part()
         n_gauss = surf.duffy_x.shape[0]
         one = dtype(1.0)
         half = dtype(0.5)
@@ -285,18 +292,23 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
                     t = t_a + u * (t1 + v * (t2 - t1))
                     x, area_vector = quad9_point(surf.nodes, element, s, t)
                     weight = surf.duffy_w[i] * surf.duffy_w[j] * dtype(0.25) * u * wp.abs(det)
-                    acc += weighted(integrand(x, area_vector * weight, pole, pole_normal), basis_at(surf, s, t))
+                    w0, w1, w2 = weighted(integrand(x, area_vector * weight, pole, pole_normal), basis_at(surf, s, t))
+                    p0 += w0
+                    p1 += w1
+                    p2 += w2
         if wp.static(m > 1):  # the pole's own basis function: from the identity, by the caller
             for j in range(3):
-                for i in range(3):
-                    acc[j, 3 * local + i] = dtype(0.0)
-        return acc
+                p0[j, local] = dtype(0.0)
+                p1[j, local] = dtype(0.0)
+                p2[j, local] = dtype(0.0)
+        return p0, p1, p2
 
     @wp.kernel(enable_backward=False, module="unique")
     def self_blocks(row_offset: int, surf: Surface, out: wp.array(dtype=mat33)):
         """out[a] = the kernel over element a at its own collocation point (single layers, p = 1)."""
         ia = wp.tid()
-        out[ia] = block_sum(own_element_integral(surf, row_offset + ia))
+        p0, p1, p2 = own_element_integral(surf, row_offset + ia)
+        out[ia] = block_sum(p0, p1, p2)
 
     @wp.kernel(enable_backward=False, module="unique")
     def assemble_entries(row_offset: int, surf: Surface, rows: wp.array(dtype=int),
@@ -309,15 +321,19 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
         ir, ic = wp.tid()
         a = rows[row_offset + ir]
         b = cols[ic]
-        blocks = Block()
+        p0 = Part()
+        p1 = Part()
+        p2 = Part()
         if b != a // m:
-            blocks = element_integral(surf, surf.poles[a], surf.pole_normals[a], b)
+            p0, p1, p2 = element_integral(surf, surf.poles[a], surf.pole_normals[a], b)
         elif wp.static(m > 1):
-            blocks = own_element_integral(surf, a)
+            p0, p1, p2 = own_element_integral(surf, a)
         for l in range(m):
+            c = 3 * (m * b + l)
             for j in range(3):
-                for i in range(3):
-                    matrix[3 * a + j, 3 * (m * b + l) + i] = blocks[j, 3 * l + i]
+                matrix[3 * a + j, c] = p0[j, l]
+                matrix[3 * a + j, c + 1] = p1[j, l]
+                matrix[3 * a + j, c + 2] = p2[j, l]
 
     @wp.kernel(enable_backward=False, module="unique")
     def gather_entries(row_offset: int, src: wp.array2d(dtype=dtype), src_rows: wp.array(dtype=int),
@@ -342,9 +358,11 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
         own = a // m
         for b in range(surf.centres.shape[0]):
             if b != own:
-                acc += element_integral(surf, surf.poles[a], surf.pole_normals[a], b) * stacked(density, b)
+                p0, p1, p2 = element_integral(surf, surf.poles[a], surf.pole_normals[a], b)
+                acc += apply_parts(p0, p1, p2, density, b)
             elif wp.static(m > 1):
-                acc += own_element_integral(surf, a) * stacked(density, b)
+                p0, p1, p2 = own_element_integral(surf, a)
+                acc += apply_parts(p0, p1, p2, density, b)
         out[ia] = acc
 
     @wp.kernel(enable_backward=False, module="unique")
@@ -356,9 +374,11 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
         own = a // m
         for b in range(surf.body_start[a], surf.body_end[a]):
             if b != own:
-                acc += block_sum(element_integral(surf, surf.poles[a], surf.pole_normals[a], b))
+                p0, p1, p2 = element_integral(surf, surf.poles[a], surf.pole_normals[a], b)
+                acc += block_sum(p0, p1, p2)
             elif wp.static(m > 1):
-                acc += block_sum(own_element_integral(surf, a))
+                p0, p1, p2 = own_element_integral(surf, a)
+                acc += block_sum(p0, p1, p2)
         out[ia] = acc
 
     @wp.kernel(enable_backward=False, module="unique")

@@ -225,4 +225,5 @@ def _density_data_on(density_order: int, order: int, dtype, device: str):
     wp = runtime.init()
     qp = quad9.gauss_legendre_square(order)[0]
     return (wp.array(np.asarray(quad9.gauss_legendre(density_order)[0]), dtype=dtype, device=device),
-            wp.array(density_basis(density_order, qp[:, 0], qp[:, 1]).ravel(), dtype=dtype, device=device))
+            wp.array(density_basis(density_order, qp[:, 0], qp[:, 1]), dtype=wp.types.vector(density_order**2, dtype),
+                     device=device))
