@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+import warpbem as wb
 from warpbem import mesh
 
 
@@ -112,3 +113,21 @@ def test_mesh_rejects_bad_arrays():
         mesh.Mesh(np.zeros((4, 3)), np.full((1, 9), 7))
     with pytest.raises(mesh.MeshError, match="non-finite"):
         mesh.Mesh(np.full((9, 3), np.inf), np.arange(9)[None])
+
+
+def test_contact_refinement_scales_with_the_mesh_so_a_finer_mesh_resolves_the_gap_finer():
+    """refinement.refine_near_contact: on the k = 4 sphere the rule is the plain ratio (element
+    radius <= gap / ratio next to the wall); on k = 8 the elements there end twice as fine, so
+    the gap is resolved as the body is and the error near contact keeps falling with the mesh."""
+    from warpbem.surfaces.refinement import element_radius, refine_near_contact
+
+    finest = {}
+    for k in (4, 8):
+        nodes = wb.mesh.sphere(1.0, k).element_nodes() + np.array([0.0, 0.0, 1.1])
+        (refined,), unresolved, _ = refine_near_contact([nodes], wall=True, ratio=3.0)
+        gap = refined[:, :, 2].min(axis=1)
+        bottom = gap < 0.101
+        finest[k] = element_radius(refined[bottom]).max()
+        assert not unresolved
+    assert finest[4] <= 0.1 / 3 * 1.0001 and finest[4] > 0.1 / 3 / 2.2  # one split short of gap / 3 is too coarse
+    assert finest[8] == pytest.approx(finest[4] / 2, rel=0.15)

@@ -137,31 +137,42 @@ def test_repeated_solves_reuse_fixed_blocks_and_match_fresh_solves():
 
 
 def test_unresolved_contacts_warn_once_naming_the_bodies():
-    """Closer than the contact refinement resolves (README stability map: errors pass 1 %),
-    the solver warns, naming the bodies; a solver used for many steps warns once per contact."""
+    """Closer than the mesh resolves (README stability map: errors pass 1 %), the solver warns,
+    naming the bodies; a solver used for many steps warns once per contact. Unrefined meshes
+    (contact_refinement 0, cheap here) warn below three element radii; refined ones below
+    refinement.WARN_FRACTION of the body's element radius (checked on the refinement alone: a
+    solve there takes thousands of elements)."""
     import warnings
 
+    from warpbem.surfaces.refinement import WALL, WARN_FRACTION, refine_near_contact
+
     sphere = wb.mesh.sphere(1.0, 4)
+    bare = dict(contact_refinement=0.0)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no warning where the contact is resolved
         wb.solve_mobility([wb.Body(sphere, position=(0, 0, 1.1))], shear_rate=1.0)
     with pytest.warns(wb.ContactResolutionWarning, match="body 0 and the wall are 0.03 m apart"):
-        wb.solve_mobility([wb.Body(sphere, position=(0, 0, 1.03))], shear_rate=1.0)
+        wb.solve_mobility([wb.Body(sphere, position=(0, 0, 1.03))], shear_rate=1.0, **bare)
     pair = [wb.Body(sphere, position=(0, 0, 3.0)), wb.Body(sphere, position=(2.005, 0, 3.0))]
     with pytest.warns(wb.ContactResolutionWarning, match="body 0 and body 1"):
-        wb.solve_mobility(pair, shear_rate=1.0)
+        wb.solve_mobility(pair, shear_rate=1.0, **bare)
     with pytest.warns(wb.ContactResolutionWarning, match="In float32, GMRES stalls"):
         try:
             wb.solve_mobility([wb.Body(sphere, position=(0, 0, 1.03))], shear_rate=1.0, dtype="float32",
-                              tolerance=1e-6)
+                              tolerance=1e-6, **bare)
         except wb.ConvergenceError:
             pass  # the stall the warning announces
-    solver = wb.MobilitySolver(shear_rate=1.0)
+    solver = wb.MobilitySolver(shear_rate=1.0, **bare)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         for z in (1.03, 1.031, 1.032):
             solver.solve([wb.Body(sphere, position=(0, 0, z))])
     assert len([w for w in caught if issubclass(w.category, wb.ContactResolutionWarning)]) == 1
+    limit = WARN_FRACTION * 0.2755  # the k = 4 sphere's element radius
+    for gap, expected in ((1.2 * limit, {}), (0.8 * limit, {(0, WALL)})):
+        nodes = sphere.element_nodes() + np.array([0, 0, 1 + gap])
+        _, unresolved, _ = refine_near_contact([nodes], True, 1.1)
+        assert set(unresolved) == set(expected)
 
 
 def test_block_jacobi_preconditioner_matches_plain_gmres_and_is_kept_for_fixed_bodies():

@@ -28,7 +28,10 @@ viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
     [time]                      end = 0.01, dt_max = 1e-4, dt_min = 1e-5, contact_gap = 5e-7,
                                 scheme = "heun", and frames by steps, frame_every = 1, or by
                                 time, frame_interval = 1e-3 (s; the steps land on frame times)
-    [solver]                    quadrature_order = 2, contact_refinement = 3.0, tolerance (GMRES;
+    [solver]                    quadrature_order = 2, density_order = 1 (1: density constant per
+                                element, the seed's; 2: bilinear, README "Accuracy per cost"),
+                                contact_refinement (default 3.0 with density_order 1, 1.1 with
+                                2; the ratio on the k = 4 sphere, scaled with the mesh), tolerance (GMRES;
                                 default 1e-8 for float64, 1e-6 for float32), dtype = "float64",
                                 refine_fixed_at_wall = true, reuse_tolerance (m; mobility
                                 snapshots reused across steps, dynamics/hydrodynamics.py;
@@ -219,7 +222,8 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
                        {"coefficient", "inverse_length", "cell_roughness", "wall_roughness"})
     time = _table("time", table["time"], {"end", "dt_max", "dt_min", "contact_gap", "scheme", "frame_every",
                                           "frame_interval"}, ("end",))
-    solver = _table("solver", table.get("solver", {}), {"quadrature_order", "contact_refinement", "tolerance",
+    solver = _table("solver", table.get("solver", {}), {"quadrature_order", "density_order", "contact_refinement",
+                                                        "tolerance",
                                                         "refine_fixed_at_wall", "dtype", "reuse_tolerance",
                                                         "reuse_lateral", "reuse_interaction"})
     if not isinstance(table["bodies"], list) or not table["bodies"]:
@@ -296,7 +300,9 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
         flow=flow_,
         solver=SolverOptions(
             quadrature_order=_number("solver.quadrature_order", solver.get("quadrature_order", 2), 1, 10, integer=True),
-            contact_refinement=_number("solver.contact_refinement", solver.get("contact_refinement", 3.0), 0, 20),
+            density_order=_number("solver.density_order", solver.get("density_order", 1), 1, 3, integer=True),
+            contact_refinement=(None if "contact_refinement" not in solver else
+                                _number("solver.contact_refinement", solver["contact_refinement"], 0, 20)),
             refine_fixed_at_wall=_bool("solver.refine_fixed_at_wall", solver.get("refine_fixed_at_wall", True)),
             tolerance=None if tolerance is None else _number("solver.tolerance", tolerance, 0, 0.1, low_open=True),
             dtype=_choice("solver.dtype", solver.get("dtype", "float64"), ("float64", "float32")),

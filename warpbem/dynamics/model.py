@@ -40,8 +40,9 @@ class SolverOptions:
     """Options of the mobility solver (``MobilitySolver``): tolerance None follows the dtype."""
 
     quadrature_order: int = 2
-    contact_refinement: float = 3.0
+    contact_refinement: float | None = None  # None: the solver's default for the density order
     refine_fixed_at_wall: bool = True
+    density_order: int = 1  # 1: constant per element (the seed's); 2: bilinear (hydro/mobility.py)
     tolerance: float | None = None
     dtype: str = "float64"
     operator: str = "auto"
@@ -64,7 +65,7 @@ class SolverOptions:
                               quadrature_order=self.quadrature_order, tolerance=self.tolerance,
                               max_iterations=self.max_iterations, dtype=self.dtype, operator=self.operator,
                               contact_refinement=self.contact_refinement,
-                              refine_fixed_at_wall=self.refine_fixed_at_wall)
+                              refine_fixed_at_wall=self.refine_fixed_at_wall, density_order=self.density_order)
 
 
 @dataclass(frozen=True)

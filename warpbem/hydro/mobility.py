@@ -65,6 +65,13 @@ class ContactResolutionWarning(UserWarning):
 FACTOR_LIMIT = 1800  # unknowns (600 elements): largest moving body block factored for GMRES
 FORCE_UNIT = 6.0 * np.pi  # scaled force of a unit-speed unit sphere; scales the load unknowns
 TORQUE_UNIT = 8.0 * np.pi
+# contact refinement ratio by density order when none is given (refinement.py: the ratio on the
+# k = 4 sphere, scaled with the mesh): the Pareto chart's choice (README, benchmarks/pareto.py)
+DEFAULT_CONTACT_REFINEMENT = {1: 3.0, 2: 1.1, 3: 1.1}
+# adaptive quadrature's near_factor by density order: a constant density's error hides the
+# element integrals' from 2 (errors against the exact series unchanged to 3 digits from 3, k = 3
+# to 8, h/a = 1.5 and 1.1; a third less assembly time at 96 elements); a bilinear one's does not
+NEAR_FACTOR = {1: 2.0, 2: 3.0, 3: 3.0}
 # GMRES relative residual by precision when none is given: float32 products carry ~1e-7 of
 # round-off, so 1e-8 is out of their reach (the stability map: 1e-6 converges down to gaps of
 # 0.1 radius)
@@ -269,14 +276,17 @@ class CompletedDoubleLayer:
             return block + self.fixed_columns[rows, k : k + 6] @ loads
         return block + modes @ weighted
 
-    def preconditioner(self, previous: "CompletedDoubleLayer | None") -> spla.LinearOperator:
+    def preconditioner(self, previous: "CompletedDoubleLayer | None", kept_for_later: bool = True) -> spla.LinearOperator:
         """Block Jacobi: the exact inverse of each body's own block (LU), kept for bodies that
         did not change since ``previous``. It takes the ill-conditioning of a body near the wall
         (its own image) out of GMRES: the box-shaped adherent cell's unrefined flat base 0.25 um
         above the wall stalled unpreconditioned GMRES at a residual of 3e-8 after 600
         iterations. A moving body's block is factored anew at each solve, so only up to
         FACTOR_LIMIT unknowns (the LU costs n^3: a sphere refined to 1500 elements near the wall
-        took 12-30 s to factor against 3-9 s of plain GMRES); larger moving bodies go without.
+        took 12-30 s to factor against 3-9 s of plain GMRES); larger moving bodies go without,
+        and so do larger fixed ones unless their factors are ``kept_for_later`` (a solver that
+        reuses its systems: a held sphere of 768 points at h/a = 1.1 took 1.8 s with its LU
+        and 0.31 s in 14 plain GMRES iterations).
         Matrix-free operators assemble each body's block alone for it (DoubleLayerOperator.
         diagonal_blocks), so large scenes keep the preconditioner."""
         if self.factors is not None:  # built for this system already
@@ -285,7 +295,7 @@ class CompletedDoubleLayer:
         kept = [p < len(old) and old[p] is not None and self.unchanged[p] and previous.fixed[p] == self.fixed[p]
                 for p in range(len(self.ranges))]
         needed = [p for p, rows in enumerate(self.ranges)
-                  if not kept[p] and (self.fixed[p] or rows.stop - rows.start <= FACTOR_LIMIT)]
+                  if not kept[p] and ((self.fixed[p] and kept_for_later) or rows.stop - rows.start <= FACTOR_LIMIT)]
         blocks = self.operator.diagonal_blocks(needed)
         self.factors = [old[p] if kept[p] else
                         scipy.linalg.lu_factor(self.body_block(p, blocks[p]), check_finite=False) if p in blocks else None
@@ -317,7 +327,8 @@ class MobilitySolver:
 
     Between calls it keeps the operator blocks, and the fixed-body completion columns, of
     bodies whose elements did not change (fixed adherent cells), and starts GMRES from the
-    previous solution (``reuse=True``). Settings as in ``solve_mobility``, and
+    previous solution (``reuse=True``). Settings as in ``solve_mobility`` (density_order 2 by
+    default here too; the time-stepping Model keeps 1 unless a scene asks, dynamics/model.py), and
     ``refine_fixed_at_wall=False``: no contact refinement of fixed bodies for their (unchanging)
     gap to the wall, which in recruitment scenes costs ~90x per step for a ~1 % effect on the
     free cells (scenes/recruitment_dome.toml).
@@ -326,25 +337,31 @@ class MobilitySolver:
     def __init__(self, shear_rate: float = 0.0, viscosity: float = 1e-3, wall: bool = True, device="cpu", *,
                  quadrature_order: int = 2, adaptive_quadrature: bool = True, tolerance: float | None = None,
                  max_iterations: int = 600, dtype: str = "float64", operator: str = "auto",
-                 contact_refinement: float = 3.0, refine_fixed_at_wall: bool = True, reuse: bool = True,
-                 precondition: bool = True, density_order: int = 1):
+                 contact_refinement: float | None = None, refine_fixed_at_wall: bool = True, reuse: bool = True,
+                 precondition: bool = True, density_order: int = 2):
         self.shear_rate = _finite("shear_rate", shear_rate)
         self.viscosity = _finite("viscosity", viscosity, positive=True)
         self.wall = bool(wall)
         self.device = device
-        self.quadrature = QuadratureOptions(order=quadrature_order, adaptive=bool(adaptive_quadrature))
+
         if dtype not in DEFAULT_TOLERANCE:
             raise ValueError(f"dtype must be one of {sorted(DEFAULT_TOLERANCE)}, got {dtype!r}")
         self.tolerance = DEFAULT_TOLERANCE[dtype] if tolerance is None else tolerance
         self.max_iterations = max_iterations
         self.dtype = dtype
         self.operator = operator
-        self.contact_refinement = _finite("contact_refinement", contact_refinement)
-        self.refine_fixed_at_wall = bool(refine_fixed_at_wall)
-        self.precondition = bool(precondition)
         if density_order not in DENSITY_ORDERS:
             raise ValueError(f"density_order must be one of {DENSITY_ORDERS}, got {density_order!r}")
         self.density_order = int(density_order)
+        self.quadrature = QuadratureOptions(order=quadrature_order, adaptive=bool(adaptive_quadrature),
+                                            near_factor=NEAR_FACTOR[self.density_order])
+        if contact_refinement is None:
+            contact_refinement = DEFAULT_CONTACT_REFINEMENT[self.density_order]
+        self.contact_refinement = _finite("contact_refinement", contact_refinement)
+        if self.contact_refinement < 0:
+            raise ValueError(f"contact_refinement must not be negative, got {contact_refinement!r}")
+        self.refine_fixed_at_wall = bool(refine_fixed_at_wall)
+        self.precondition = bool(precondition)
         self.reuse = bool(reuse)
         self._last = None  # (CompletedDoubleLayer, solution vector, speed, bodies key) of the previous solve
         self._warned = set()  # contacts already reported by this solver
@@ -368,6 +385,9 @@ class MobilitySolver:
         fixed = np.array([b.fixed for b in bodies])
         prescribed = np.array([np.concatenate([b.velocity, b.angular_velocity * length]) for b in bodies])
         slip = [b.surface_velocity for b in bodies] if background else [None] * len(bodies)
+        if self.density_order != 1 and any(v is not None for v in slip):
+            raise ValueError("a surface_velocity is given per element, for the constant density: solve it with"
+                             " density_order=1 (the deformation model's traction is constant per element too)")
         speed = max(abs(self.shear_rate) * length, np.abs(forces).max() / (self.viscosity * length),
                     np.abs(torques).max() / (self.viscosity * length**2), np.abs(prescribed).max(),
                     max((np.abs(v).max() for v in slip if v is not None), default=0.0))
@@ -420,7 +440,7 @@ class MobilitySolver:
         if initial_guess is None and previous is not None and background:
             # the previous solution is in the previous scaling: rescale the loads part with it
             initial_guess = system.initial_guess(previous, self._last[1] * (self._last[2] / speed))
-        preconditioner = system.preconditioner(previous) if self.precondition else None
+        preconditioner = system.preconditioner(previous, self.reuse) if self.precondition else None
         result = gmres(system.linear_operator(), rhs, tolerance=self.tolerance,
                        max_iterations=self.max_iterations, initial_guess=initial_guess,
                        preconditioner=preconditioner, exact_preconditioner=system.preconditioner_is_exact())
@@ -456,10 +476,11 @@ class MobilitySolver:
             what = "the wall" if q == WALL else f"body {q}"
             warnings.warn(
                 f"body {p} and {what} are {gap * length:.3g} m apart ({gap:.3g} mean radii), closer than"
-                f" the contact refinement resolves (contact_refinement={self.contact_refinement:g}): the"
-                " elements there are wider than a third of the gap. Squeeze-flow forces lose accuracy"
-                " first, and the error grows fast as the gap closes (README: stability map); finer"
-                " meshes or a larger contact_refinement help."
+                f" the mesh resolves (contact_refinement={self.contact_refinement:g}): the gap to the wall, or"
+                " half the gap to another body, is under 2 % of the body's element radius, or under three"
+                " element radii without refinement, or the refinement stopped at its deepest level."
+                " Squeeze-flow forces lose accuracy first, past about 1 % (README: stability map); a finer"
+                " mesh helps."
                 + (" In float32, GMRES stalls from about here: use dtype='float64'." if self.dtype == "float32" else ""),
                 ContactResolutionWarning, stacklevel=3)
 
@@ -480,8 +501,8 @@ def solve_mobility(
     dtype: str = "float64",
     operator: str = "auto",
     initial_guess=None,
-    contact_refinement: float = 3.0,
-    density_order: int = 1,
+    contact_refinement: float | None = None,
+    density_order: int = 2,
 ) -> MobilitySolution:
     """Rigid velocities of free bodies and holding loads of fixed ones (SI units), one solve.
 
@@ -492,7 +513,11 @@ def solve_mobility(
     relative residual (default by dtype: 1e-8 for float64, 1e-6 for float32); dtype:
     "float64" or "float32" kernels; operator: "auto", "dense" or "matrix_free"; initial_guess: a previous solution's ``solution_vector``;
     contact_refinement: split elements nearer than 1/ratio of their radius to the wall or
-    another body (0: never). For repeated solves use ``MobilitySolver``.
+    another body (0: never), the ratio on the k = 4 sphere, scaled with the mesh
+    (surfaces/refinement.py); None: 1.1 with density_order 2, 3.0 with 1; density_order: 2
+    (default, chosen from the Pareto chart, README "Accuracy per cost"), the density bilinear
+    on 2 x 2 points per element, or 1, constant per element (the seed's scheme), or 3. For
+    repeated solves use ``MobilitySolver``.
     """
     solver = MobilitySolver(shear_rate, viscosity, wall, device, quadrature_order=quadrature_order,
                             adaptive_quadrature=adaptive_quadrature, tolerance=tolerance,

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from . import quad9
-from .placement import winding_number
+from .placement import surface_samples, winding_number
 
 
 class MeshError(ValueError):
@@ -83,6 +83,14 @@ class Mesh:
         if getattr(self, "_equivalent_radius", None) is None:
             object.__setattr__(self, "_equivalent_radius", float((3.0 * self.volume() / (4.0 * np.pi)) ** (1.0 / 3.0)))
         return self._equivalent_radius
+
+    def surface_samples(self) -> np.ndarray:
+        """placement.surface_samples of the mesh, in its own coordinates (remembered, read-only)."""
+        if getattr(self, "_surface_samples", None) is None:
+            samples = surface_samples(self.element_nodes())
+            samples.setflags(write=False)
+            object.__setattr__(self, "_surface_samples", samples)
+        return self._surface_samples
 
     def encloses_origin(self) -> bool:
         """Whether the reference point (the origin of the mesh coordinates) lies inside the

@@ -58,14 +58,16 @@ def signed_distance(points: np.ndarray, element_nodes: np.ndarray, order: int = 
     return side * np.linalg.norm(points - x, axis=1)
 
 
-def _surface_samples(element_nodes: np.ndarray) -> np.ndarray:
+def surface_samples(element_nodes: np.ndarray) -> np.ndarray:
+    """Points on the surface that the placement checks test: the nodes and 4 x 4 Gauss points
+    of every element."""
     positions, _ = quad9.surface_quadrature(element_nodes, 4)
     return np.concatenate([element_nodes.reshape(-1, 3), positions.reshape(-1, 3)])
 
 
 def check_placement(bodies, wall: bool) -> None:
-    element_nodes = [b.world_nodes()[b.mesh.elements] for b in bodies]
-    samples = [_surface_samples(e) for e in element_nodes]
+    # the samples of each mesh moved with its body (a rigid motion of the mesh's own samples)
+    samples = [b.mesh.surface_samples() @ b.rotation().T + b.position for b in bodies]
     for i, body in enumerate(bodies):
         if not body.mesh.encloses_origin():
             raise PlacementError(
@@ -83,10 +85,8 @@ def check_placement(bodies, wall: bool) -> None:
         for j in range(i + 1, len(bodies)):
             if np.linalg.norm(bodies[i].position - bodies[j].position) > radii[i] + radii[j]:
                 continue
-            depth = min(
-                signed_distance(samples[j], element_nodes[i]).min(),
-                signed_distance(samples[i], element_nodes[j]).min(),
-            )
+            nodes_i, nodes_j = (b.world_nodes()[b.mesh.elements] for b in (bodies[i], bodies[j]))
+            depth = min(signed_distance(samples[j], nodes_i).min(), signed_distance(samples[i], nodes_j).min())
             if depth <= 0.0:
                 raise PlacementError(
                     f"bodies {i} and {j} overlap (centres {bodies[i].position.tolist()} and"

@@ -1,13 +1,17 @@
 """Local refinement of QUAD9 elements near contact (a body near the wall or another body).
 
-Near contact the flow in the gap varies on the gap's length scale, which a density constant
-per element resolves only if the elements there are about as small. Each element closer to the
-wall or to another body than ``1/ratio`` times its radius is split into four children (the
-quarters of its parameter square, mapped by its own biquadratic geometry, so the surface is
-unchanged), repeatedly up to ``max_levels`` times. The refined mesh has hanging nodes, which
-the piecewise-constant collocation method does not mind: only the element integrals, areas and
-collocation points enter. The seed had no such refinement; its near-contact motion was
-"rough" (thesis ch. 3.3).
+Near contact the flow in the gap varies on the gap's length scale, which the density resolves
+only if the elements there are about as small. Each element closer to the wall or to another
+body than ``1/ratio`` times its radius is split into four children (the quarters of its
+parameter square, mapped by its own biquadratic geometry, so the surface is unchanged),
+repeatedly up to ``max_levels`` times. The ratio is scaled with the body's own mesh
+(``relative_element_size`` against the k = 4 sphere's): a mesh twice as fine is refined twice
+as finely near contact, so the gap is resolved as the body is and the error near contact falls
+with the mesh instead of stopping at a floor the ratio sets (issue 11: at h/a = 1.1 the normal
+drag stayed at -1.4 % from k = 8 on with a fixed ratio). The refined mesh has hanging nodes,
+which the collocation methods do not mind: the density is discontinuous between elements and
+only the element integrals, areas and collocation points enter. The seed had no such
+refinement; its near-contact motion was "rough" (thesis ch. 3.3).
 """
 
 from __future__ import annotations
@@ -36,12 +40,37 @@ def element_radius(element_nodes: np.ndarray) -> np.ndarray:
     return np.linalg.norm(element_nodes - element_nodes[:, 8:9], axis=-1).max(axis=1)
 
 
+def relative_element_size(element_nodes: np.ndarray) -> float:
+    """Median element radius of a body's mesh over the body's size (largest node distance from
+    the mean node): how finely the mesh resolves the body (0.28 for the k = 4 sphere)."""
+    cloud = element_nodes.reshape(-1, 3)
+    return float(np.median(element_radius(element_nodes)) / np.linalg.norm(cloud - cloud.mean(axis=0), axis=1).max())
+
+
+# relative_element_size of the k = 4 sphere (96 elements, the seed's mesh): on it the rule is
+# the plain ratio, an element split while its radius exceeds gap / ratio
+REFERENCE_ELEMENT_SIZE = 0.2755
+
+# refined meshes are reported unresolved where the resolved length (below) is under this
+# fraction of the body's own element radius: there the default scheme passes about 1 % error
+# (README stability map: on the k = 4 sphere, squeeze flow to the wall 1.2 % at a gap of 0.005
+# radius, two spheres ... at ...)
+WARN_FRACTION = 0.02
+
 WALL = -1  # neighbour id of the wall in the contact lists
 
 
+def resolved_length(gap: np.ndarray, neighbour: np.ndarray) -> np.ndarray:
+    """The length the elements must resolve: the gap to the wall, half the gap to another body
+    (each body meets the other's flow at the mid-plane, a wall at half the gap; with the whole
+    gap two spheres at 0.05 radius were 2.0 % off against 0.18 % for one at the wall)."""
+    return np.where(neighbour == WALL, gap, 0.5 * gap)
+
+
 def _gaps(meshes, p, wall, ratio):
-    """Gap from each element centre of body p to the wall (if ``wall``) and to every other body
-    near enough to matter, and the nearest neighbour (WALL or a body index)."""
+    """Gap from each element of body p to the wall (if ``wall``; its lowest node) and to every
+    other body near enough to matter (from its centre to the body's nearest node), and the
+    nearest neighbour (WALL or a body index)."""
     elements = meshes[p]
     centres = elements[:, 8]
     gap = np.full(len(elements), np.inf)
@@ -51,7 +80,7 @@ def _gaps(meshes, p, wall, ratio):
     clouds = [m.reshape(-1, 3) for m in meshes]
     middle = clouds[p].mean(axis=0)
     reach = np.linalg.norm(clouds[p] - middle, axis=1).max()
-    largest = element_radius(elements).max() * ratio
+    largest = 2.0 * element_radius(elements).max() * ratio  # 2: a body's gap is resolved by halves
     for q, cloud in enumerate(clouds):
         if q == p:
             continue
@@ -68,7 +97,7 @@ def _gaps(meshes, p, wall, ratio):
 
 
 def refine_near_contact(element_nodes: list[np.ndarray], wall: bool, ratio: float,
-                        max_levels: int = 4, warn_ratio: float = 3.0,
+                        max_levels: int = 6, warn_ratio: float = 3.0,
                         wall_exempt=None) -> tuple[list[np.ndarray], dict, list[np.ndarray]]:
     """Refine every body's elements (list of (E_p, 9, 3) arrays, one per body); ``ratio`` 0
     refines nothing. ``wall_exempt`` (one flag per body): bodies not refined for, nor warned
@@ -76,21 +105,26 @@ def refine_near_contact(element_nodes: list[np.ndarray], wall: bool, ratio: floa
     cells' motion little; see scenes/recruitment_dome.toml).
 
     Returns the refined meshes, the contacts they leave unresolved and, per body, the element
-    of the unrefined mesh each refined element came from. The unresolved contacts are {(p, q): smallest gap}
-    for body p near body q (q = WALL for the wall) where an element of p is still wider (in
-    radius) than its gap over ``warn_ratio``. The stability map (README) shows why: with the
-    default k = 4 sphere the refinement bottoms out at gaps near 0.05 radius, where squeeze-flow
-    forces are 3 % off and motion in shear 1 %; at 0.01 radius they are 27 % and 5 % off, and
-    below about 0.005 radius the results are meaningless or GMRES stalls.
+    of the unrefined mesh each refined element came from. The unresolved contacts are {(p, q):
+    smallest gap} for body p near body q (q = WALL for the wall) where the length to resolve is
+    below WARN_FRACTION of p's own element radius or the rule still fails after ``max_levels``
+    levels (6: the k = 4 sphere's elements end at 1/64 of their radius, and the element count,
+    growing about as 1 / gap, stays bounded where the warning is given anyway); with ``ratio``
+    0, where an element is wider, in radius, than that length over ``warn_ratio``. README,
+    stability map.
     """
     meshes = [e.copy() for e in element_nodes]
     parents = [np.arange(len(e)) for e in element_nodes]
     exempt = np.zeros(len(meshes), bool) if wall_exempt is None else np.asarray(wall_exempt, bool)
+    # per body: the split rule r_e * ratios[p] > gap, scaled with the body's own mesh when it is
+    # finer than the k = 4 sphere (a coarser one keeps the plain ratio: refining it less made a
+    # k = 3 sphere in shear drift 3.5 times faster, test_dynamics)
+    ratios = [ratio * max(1.0, REFERENCE_ELEMENT_SIZE / relative_element_size(e)) for e in element_nodes]
     for _ in range(max_levels if ratio > 0 else 0):
         changed = False
         for p, elements in enumerate(meshes):
-            gap, _ = _gaps(meshes, p, wall and not exempt[p], ratio)
-            coarse = element_radius(elements) * ratio > gap
+            gap, neighbour = _gaps(meshes, p, wall and not exempt[p], ratios[p])
+            coarse = element_radius(elements) * ratios[p] > resolved_length(gap, neighbour)
             if coarse.any():
                 meshes[p] = np.concatenate([elements[~coarse], split(elements[coarse])])
                 parents[p] = np.concatenate([parents[p][~coarse], np.repeat(parents[p][coarse], 4)])
@@ -99,8 +133,13 @@ def refine_near_contact(element_nodes: list[np.ndarray], wall: bool, ratio: floa
             break
     unresolved = {}
     for p, elements in enumerate(meshes):
-        gap, neighbour = _gaps(meshes, p, wall and not exempt[p], max(ratio, warn_ratio))
-        coarse = element_radius(elements) * warn_ratio > gap
+        gap, neighbour = _gaps(meshes, p, wall and not exempt[p], max(ratios[p], warn_ratio))
+        length = resolved_length(gap, neighbour)
+        if ratio > 0:  # refined: closer than the scheme resolves to about 1 %, or max_levels reached
+            coarse = ((length < WARN_FRACTION * np.median(element_radius(element_nodes[p])))
+                      | (element_radius(elements) * ratios[p] > length))
+        else:
+            coarse = element_radius(elements) * warn_ratio > length
         for q in np.unique(neighbour[coarse]):
             unresolved[(p, int(q))] = float(gap[coarse & (neighbour == q)].min())
     return meshes, unresolved, parents
