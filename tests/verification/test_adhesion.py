@@ -226,14 +226,16 @@ def test_a_free_cell_binds_to_ligands_on_an_adherent_cell():
     the adherent cell's microvillus layer of its surface (10 um above the wall, out of the
     wall's reach) binds to it only; each new bond has its rest length lambda and points from
     the tip towards the adherent cell; held in shear by them, the free cell's bond load is
-    returned in full on the adherent cell (Newton's third law in the frame's bond_force)."""
+    returned in full on the adherent cell (Newton's third law in the frame's bond_force). The
+    cell starts downstream, so the flow stretches its bonds (18 pN after 4 steps; upstream it
+    would compress them, and the loads compared would be round-off, 1e-25 N)."""
     gap = 175e-9 + 60e-9  # tips 60 nm from the adherent surface
     meshes = [MESH, MESH]
     bonds = Adhesion(meshes, [False, True], **{**TABLE_4_1, "on_rate": 2e3}, ligand_bodies=[False, True], seed=4)
     model = Model(meshes, [False, True], Flow(100.0, 1e-3), interactions=[bonds],
                   solver=SolverOptions(), policy=StepPolicy(2e-4, 1e-7, 1e-9), scheme="euler")
     sim = Simulator(model)
-    state = model.initial_state([[-(2 * A + gap), 0.0, 10e-6], [0.0, 0.0, 10e-6]])
+    state = model.initial_state([[2 * A + gap, 0.0, 10e-6], [0.0, 0.0, 10e-6]])
     for _ in range(4):
         state, frame = sim.step(state)
     part = state.parts["bond"]
@@ -245,7 +247,7 @@ def test_a_free_cell_binds_to_ligands_on_an_adherent_cell():
     assert len(new) > 0
     np.testing.assert_allclose(np.linalg.norm(tips[np.isin(rows, new)] - part["anchor"][new], axis=1), 30e-9,
                                rtol=1e-9)
-    assert np.all(part["anchor"][rows, 0] > tips[:, 0])  # towards the adherent cell (+x)
+    assert np.all(part["anchor"][rows, 0] < tips[:, 0])  # towards the adherent cell (-x)
     np.testing.assert_allclose(frame.loads["bond"].force[1], -frame.loads["bond"].force[0], rtol=1e-12,
                                atol=1e-12 * np.abs(frame.loads["bond"].force[0]).max())
-    assert np.abs(frame.loads["bond"].force[0]).max() > 0
+    assert np.abs(frame.loads["bond"].force[0]).max() > 1e-12  # a stretched bond: above 1 pN

@@ -265,16 +265,18 @@ class CompletedDoubleLayer:
 
     def body_block(self, body: int, matrix: np.ndarray) -> np.ndarray:
         """The diagonal block of ``matvec`` for one body's density, from that body's own block
-        ``matrix`` of 1/2 + D: D (I - Pi) + Pi (free) or + C L Pi (fixed: its load columns),
-        Pi = Phi Phi^T W."""
+        ``matrix`` of 1/2 + D (overwritten): D (I - Pi) + Pi (free) or + C L Pi (fixed: its load
+        columns), Pi = Phi Phi^T W, as one rank-6 update in place (each fresh copy of a large
+        block cost more than the arithmetic)."""
         rows = self.ranges[body]
         modes, weighted = self.modes[body], self.modes[body].T * self.weights[rows]  # Pi = modes @ weighted
-        block = matrix - (matrix @ modes) @ weighted
         if self.fixed[body]:
             k = 6 * self.fixed_index[body]
-            loads = self.load_per_coefficient[k : k + 6, None] * weighted
-            return block + self.fixed_columns[rows, k : k + 6] @ loads
-        return block + modes @ weighted
+            added = self.fixed_columns[rows, k : k + 6] * self.load_per_coefficient[k : k + 6]
+        else:
+            added = modes
+        matrix += (added - matrix @ modes) @ weighted
+        return matrix
 
     def preconditioner(self, previous: "CompletedDoubleLayer | None", kept_for_later: bool = True) -> spla.LinearOperator:
         """Block Jacobi: the exact inverse of each body's own block (LU), kept for bodies that
@@ -477,7 +479,8 @@ class MobilitySolver:
             warnings.warn(
                 f"body {p} and {what} are {gap * length:.3g} m apart ({gap:.3g} mean radii), closer than"
                 f" the mesh resolves (contact_refinement={self.contact_refinement:g}): the gap to the wall, or"
-                " half the gap to another body, is under 2 % of the body's element radius, or under three"
+                " the gap to another body (half of it with density_order 2), is under 2 % of the body's"
+                " element radius, or under three"
                 " element radii without refinement, or the refinement stopped at its deepest level."
                 " Squeeze-flow forces lose accuracy first, past about 1 % (README: stability map); a finer"
                 " mesh helps."
