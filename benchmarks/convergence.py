@@ -63,9 +63,10 @@ def main():
             previous = None
             for k in ks:
                 mesh = wb.mesh.sphere(1.0, k)
-                # "fixed": the ratio the mesh scaling turns back into 3 on this mesh
-                contact = 3.0 * relative_element_size(mesh.element_nodes()) / REFERENCE_ELEMENT_SIZE \
-                    if ratio == "fixed" else ratio
+                # "fixed": the ratio the mesh scaling (refinement.py: meshes finer than k = 4 only)
+                # turns back into 3 on this mesh
+                scaling = max(1.0, REFERENCE_ELEMENT_SIZE / relative_element_size(mesh.element_nodes()))
+                contact = 3.0 / scaling if ratio == "fixed" else ratio
                 e = errors(mesh, h, density_order=p, contact_refinement=contact)
                 rows.append(dict(h=h, scheme=scheme, k=k, **e))
                 print(f"h/a = {h}, {scheme}, k = {k}: {e['points']} points, "
