@@ -43,6 +43,7 @@ def test_bilinear_density_annihilates_rigid_rotations_at_fourth_order(wall):
     constant, coarse, fine = _rotation_residual(4, 1, wall), _rotation_residual(2, 2, wall), _rotation_residual(4, 2, wall)
     assert fine < coarse / 10  # order above 3 in the element size
     assert fine < constant / 50
+    assert _rotation_residual(2, 3, wall) < coarse / 5  # biquadratic (p = 3): 4.6e-5 on k = 2
 
 
 def test_bilinear_density_matrix_free_product_equals_the_assembled_one():
