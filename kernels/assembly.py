@@ -37,6 +37,13 @@ Element integrals  I_ab = int_{E_b} f(x, n(x), xi_a) dS(x)  use
 
 The self element (a == b) is skipped: its double-layer contribution follows from the
 constant-density identity (thesis ch. 3.3; Phan-Thien & Fan 1996), applied by the caller.
+
+``density_order`` p > 1 (double layer only): the density is Lagrange on the p x p Gauss points
+of each element (discontinuous between elements), its values there the unknowns; every element
+integral carries the basis functions as weights, one 3x3 block each, and the collocation point's
+own element, skipped no more, is integrated by the Duffy rule about the point for its other
+basis functions (bounded there: the kernel is O(1/r) on a curved surface, the basis function
+O(r)), its own block following from the identity.
 """
 
 

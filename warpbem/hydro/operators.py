@@ -4,7 +4,10 @@ For a density q constant on each element and collocation at the element centres 
 
     ((1/2 + D) q)_a = sum_{b in body(a)} I_ab (q_b - q_a) + sum_{b not in body(a)} I_ab q_b,
 
-with I_ab = int_{E_b} Sigma(x, xi_a) . n(x) dS(x) (``kernels/greens.py``). The first sum is the
+with I_ab = int_{E_b} Sigma(x, xi_a) . n(x) dS(x) (``kernels/greens.py``). With a density of
+order p > 1 (Lagrange on p x p points per element, ``geometry.py``) the unknowns are the values
+at those points, I_ab becomes one block per basis function, int_{E_b} Sigma . n L_l dS, and the
+same identity gives the self block (the basis functions sum to one). The first sum is the
 constant-density identity int_S Sigma . n dS = -1/2 on a closed surface (thesis ch. 3.3;
 Phan-Thien & Fan 1996), which holds for the wall kernel too because the image part is regular
 inside the body; it replaces the singular self-element integral, and makes the discrete
