@@ -67,8 +67,7 @@ class SurfaceGeometry:
             n = quad9.shape_functions(s, t)[0]
             collocation = np.einsum("qa,eai->eqi", n, element_nodes).reshape(-1, 3)
             normals = quad9.unit_normals(element_nodes, s, t).reshape(-1, 3)
-            qp = quad9.gauss_legendre_square(order)[0]
-            areas = (np.linalg.norm(area_vectors, axis=-1) @ density_basis(density_order, qp[:, 0], qp[:, 1])).ravel()
+            areas = (np.linalg.norm(area_vectors, axis=-1) @ basis_at_gauss_points(density_order, order)).ravel()
         return cls(
             length_scale=length_scale,
             element_nodes=element_nodes,
@@ -225,10 +224,19 @@ def density_basis(density_order: int, s, t) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=None)
+def basis_at_gauss_points(density_order: int, order: int) -> np.ndarray:
+    """(order^2, p^2) the density basis at the regular Gauss points of ``surface_quadrature``
+    (remembered, read-only)."""
+    qp = quad9.gauss_legendre_square(order)[0]
+    basis = density_basis(density_order, qp[:, 0], qp[:, 1])
+    basis.setflags(write=False)
+    return basis
+
+
+@functools.lru_cache(maxsize=None)
 def _density_data_on(density_order: int, order: int, dtype, device: str):
     """The collocation abscissae and the basis at the regular Gauss points, on the device."""
     wp = runtime.init()
-    qp = quad9.gauss_legendre_square(order)[0]
     return (wp.array(np.asarray(quad9.gauss_legendre(density_order)[0]), dtype=dtype, device=device),
-            wp.array(density_basis(density_order, qp[:, 0], qp[:, 1]), dtype=wp.types.vector(density_order**2, dtype),
+            wp.array(basis_at_gauss_points(density_order, order), dtype=wp.types.vector(density_order**2, dtype),
                      device=device))

@@ -44,8 +44,11 @@ def gmres(operator: spla.LinearOperator, rhs: np.ndarray, tolerance: float = 1e-
         raise ValueError(f"max_iterations must be a positive integer, got {max_iterations!r}")
     restart = min(restart, int(max_iterations))
     if exact_preconditioner and preconditioner is not None:
-        x = np.zeros_like(rhs) if initial_guess is None else np.asarray(initial_guess, dtype=float)
-        x = x + preconditioner.matvec(rhs - operator.matvec(x) if initial_guess is not None else rhs)
+        if initial_guess is None:
+            x = preconditioner.matvec(rhs)
+        else:
+            x0 = np.asarray(initial_guess, dtype=float)
+            x = x0 + preconditioner.matvec(rhs - operator.matvec(x0))
         residual = float(np.linalg.norm(rhs - operator.matvec(x)) / rhs_norm)
         if np.all(np.isfinite(x)) and residual <= tolerance:
             return GMRESResult(x, 1, residual, True)

@@ -345,7 +345,6 @@ class MobilitySolver:
         self.viscosity = _finite("viscosity", viscosity, positive=True)
         self.wall = bool(wall)
         self.device = device
-
         if dtype not in DEFAULT_TOLERANCE:
             raise ValueError(f"dtype must be one of {sorted(DEFAULT_TOLERANCE)}, got {dtype!r}")
         self.tolerance = DEFAULT_TOLERANCE[dtype] if tolerance is None else tolerance

@@ -54,8 +54,8 @@ REFERENCE_ELEMENT_SIZE = 0.2755
 
 # refined meshes are reported unresolved where the resolved length (below) is under this
 # fraction of the body's own element radius: there the default scheme passes about 1 % error
-# (README stability map: on the k = 4 sphere, squeeze flow to the wall 1.2 % at a gap of 0.005
-# radius, two spheres ... at ...)
+# (README stability map: on the k = 4 sphere, 0.0055 radius; the squeeze flow to the wall is 1.2 %
+# off at a gap of 0.005 radius, two spheres 0.85 % at 0.02 and more below)
 WARN_FRACTION = 0.02
 
 WALL = -1  # neighbour id of the wall in the contact lists
