@@ -319,15 +319,21 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
 
     @wp.kernel(enable_backward=False, module="unique")
     def assemble_entries(row_offset: int, surf: Surface, rows: wp.array(dtype=int),
-                         cols: wp.array(dtype=int), matrix: wp.array2d(dtype=dtype)):
+                         cols: wp.array(dtype=int), compact: int, matrix: wp.array2d(dtype=dtype)):
         """matrix[3a + j, 3 (m b + l) + i] = the (j, i) entry of the integral of the kernel
         times basis function l over element b at collocation point a, for the points a =
-        rows[..] of this launch and the elements b = cols[..]. The pole's own block is zero (the
-        caller fills it from the identity); the other basis functions of its own element come
-        from the Duffy rule (p > 1)."""
+        rows[..] of this launch and the elements b = cols[..] (``compact``: at the positions of a
+        and b in their lists instead, a block of the treecode's near field). The pole's own block
+        is zero (the caller fills it from the identity); the other basis functions of its own
+        element come from the Duffy rule (p > 1)."""
         ir, ic = wp.tid()
         a = rows[row_offset + ir]
         b = cols[ic]
+        row = a
+        col = b
+        if compact != 0:
+            row = row_offset + ir
+            col = ic
         p0 = Part()
         p1 = Part()
         p2 = Part()
@@ -336,11 +342,11 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
         elif wp.static(m > 1):
             p0, p1, p2 = own_element_integral(surf, a)
         for l in range(m):
-            c = 3 * (m * b + l)
+            c = 3 * (m * col + l)
             for j in range(3):
-                matrix[3 * a + j, c] = p0[j, l]
-                matrix[3 * a + j, c + 1] = p1[j, l]
-                matrix[3 * a + j, c + 2] = p2[j, l]
+                matrix[3 * row + j, c] = p0[j, l]
+                matrix[3 * row + j, c + 1] = p1[j, l]
+                matrix[3 * row + j, c + 2] = p2[j, l]
 
     @wp.kernel(enable_backward=False, module="unique")
     def gather_entries(row_offset: int, src: wp.array2d(dtype=dtype), src_rows: wp.array(dtype=int),
@@ -356,14 +362,20 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
 
     @wp.kernel(enable_backward=False, module="unique")
     def apply_matrix_free(row_offset: int, surf: Surface, diagonal: wp.array(dtype=mat33),
-                          density: wp.array(dtype=vec3), out: wp.array(dtype=vec3)):
-        """out[a] = sum over the elements b of their blocks at a times b's density values, and
-        diagonal[a] density[a] (rows of this block; the layout of ``assemble_entries``)."""
+                          density: wp.array(dtype=vec3), group_of_point: wp.array(dtype=int),
+                          list_start: wp.array(dtype=int), list_elements: wp.array(dtype=int),
+                          out: wp.array(dtype=vec3)):
+        """out[a] = diagonal[a] density[a] plus, over the elements b listed for a's group
+        (list_elements[list_start[g] : list_start[g + 1]], g = group_of_point[a]: every element
+        for the direct sum, the near field of a's leaf for the treecode), their blocks at a times
+        b's density values (rows of this block; the layout of ``assemble_entries``)."""
         ia = wp.tid()
         a = row_offset + ia
         acc = diagonal[a] * density[a]
         own = a // m
-        for b in range(surf.centres.shape[0]):
+        group = group_of_point[a]
+        for k in range(list_start[group], list_start[group + 1]):
+            b = list_elements[k]
             if b != own:
                 p0, p1, p2 = element_integral(surf, surf.poles[a], surf.pole_normals[a], b)
                 acc += apply_parts(p0, p1, p2, density, b)
@@ -392,15 +404,45 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
     def point_force_velocity(
         row_offset: int,
         targets: wp.array(dtype=vec3), poles: wp.array(dtype=vec3), forces: wp.array(dtype=vec3),
+        group_of_target: wp.array(dtype=int), list_start: wp.array(dtype=int), list_poles: wp.array(dtype=int),
         out: wp.array(dtype=vec3),
     ):
-        """out[t] = sum_p G(target_t, pole_p) force_p (velocity times viscosity)."""
+        """out[t] = sum_p G(target_t, pole_p) force_p (velocity times viscosity) over the poles
+        listed for the target's group (as in ``apply_matrix_free``)."""
         it = wp.tid()
-        x = targets[row_offset + it]
+        t = row_offset + it
+        x = targets[t]
         acc = vec3()
-        for p in range(poles.shape[0]):
+        group = group_of_target[t]
+        for k in range(list_start[group], list_start[group + 1]):
+            p = list_poles[k]
             acc += g.stokeslet(x, vec3(), poles[p]) * forces[p]
         out[it] = acc
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def proxy_interactions(row_offset: int, targets: wp.array(dtype=vec3), sources: wp.array(dtype=vec3),
+                           out: wp.array2d(dtype=dtype)):
+        """out[3 t + j, 12 s + c]: velocity component j at target t per unit strength component
+        c at source s of the treecode's far field (warpbem/hydro/treecode.py): c = 3 k + i the
+        double-layer density's component i times its area vector's component k (the double
+        layer is linear in n), c = 9 + i a point force along e_i."""
+        it, js = wp.tid()
+        t = row_offset + it
+        x = targets[t]
+        y = sources[js]
+        zero = dtype(0.0)
+        one = dtype(1.0)
+        for k in range(3):
+            e = vec3(zero, zero, zero)
+            e[k] = one
+            block = g.double_layer(y, e, x)
+            for j in range(3):
+                for i in range(3):
+                    out[3 * t + j, 12 * js + 3 * k + i] = block[j, i]
+        force = g.stokeslet(x, vec3(), y)
+        for j in range(3):
+            for i in range(3):
+                out[3 * t + j, 12 * js + 9 + i] = force[j, i]
 
     @wp.kernel(enable_backward=False, module="unique")
     def point_force_tensors(row_offset: int, targets: wp.array(dtype=vec3), poles: wp.array(dtype=vec3),
@@ -430,5 +472,6 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
         self_blocks=self_blocks,
         point_force_velocity=point_force_velocity,
         point_force_tensors=point_force_tensors,
+        proxy_interactions=proxy_interactions,
         quad9_point=quad9_point,
     )

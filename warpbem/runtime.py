@@ -81,6 +81,15 @@ def free_memory(device) -> int:
     return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
 
 
+def total_memory(device) -> int:
+    """Bytes of memory of ``device``: the host's physical memory, the GPU's on CUDA. A run's
+    operator mode is decided from this, not from what happens to be free at the moment (the run's
+    own kept systems would otherwise flip it part-way)."""
+    if not device.is_cpu:
+        return int(device.total_memory)
+    return int(os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+
+
 def cpu_threads() -> int:
     return max(1, min(len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1, 8))
 

@@ -55,7 +55,9 @@ from ..surfaces.placement import check_placement
 from ..surfaces.refinement import WALL
 from .geometry import SurfaceGeometry
 from .linalg import gmres
-from .operators import DENSITY_ORDERS, DoubleLayerOperator, QuadratureOptions
+from .operators import (DENSITY_ORDERS, OPERATOR_MODES, DoubleLayerOperator, QuadratureOptions, choose_operator,
+                        dof_indices)
+from .treecode import TreecodeOptions
 
 
 class ContactResolutionWarning(UserWarning):
@@ -150,9 +152,19 @@ def non_rigid_part(geometry: SurfaceGeometry, body: int, surface_velocity: np.nd
     return w - modes @ np.linalg.solve(gram, modes.T @ (weights * w))
 
 
-def dof_indices(elements: np.ndarray) -> np.ndarray:
-    """Unknown indices 3a, 3a+1, 3a+2 of the given elements."""
-    return (3 * np.asarray(elements)[:, None] + np.arange(3)).ravel()
+def completion_poles(geometry: SurfaceGeometry, body: int):
+    """The 7 poles of body p's completion, its reference point and 6 points at +-d along the
+    axes (d a quarter of the distance to its nearest collocation point), and d."""
+    start, stop = geometry.body_ranges[body]
+    centre = geometry.centres[body]
+    d = 0.25 * np.linalg.norm(geometry.collocation[start:stop] - centre, axis=1).min()
+    e = np.eye(3)
+    return np.concatenate([centre[None], centre + d * e, centre - d * e]), d
+
+
+def all_completion_poles(geometry: SurfaceGeometry) -> np.ndarray:
+    """(7 n_bodies, 3) the completion poles of every body, body after body."""
+    return np.concatenate([completion_poles(geometry, p)[0] for p in range(len(geometry.body_ranges))])
 
 
 class CompletedDoubleLayer:
@@ -179,23 +191,35 @@ class CompletedDoubleLayer:
         self.unchanged = geometry.unchanged_bodies(previous.geometry if previous else None)
         self.factors = None  # LU of each body's block (None: not factored), see preconditioner
         self._block_jacobi = None
-        self.fixed_columns = self._fixed_body_columns(previous)
+        # the treecode sums the fixed bodies' completions with the double layer; the dense
+        # columns of every fixed body at every point would not fit (1024 cells: 14 GB)
+        self.treecode = operator.mode == "treecode"
+        self.fixed_columns = None if self.treecode else self._fixed_body_columns(previous)
+        self.own_columns = {p: self._own_columns(p) for p in np.flatnonzero(self.fixed)}
         # load per unit rigid coefficient: makes <phi_l, V(s_l e_l)> = 1 (rigid block ~ identity)
-        self.load_per_coefficient = np.zeros(self.fixed_columns.shape[1])
+        self.load_per_coefficient = np.zeros(6 * int(self.fixed.sum()))
         for p in np.flatnonzero(self.fixed):
             k = 6 * self.fixed_index[p]
             rows = self.ranges[p]
-            response = self.modes[p].T @ (self.weights[rows, None] * self.fixed_columns[rows, k : k + 6])
+            response = self.modes[p].T @ (self.weights[rows, None] * self.own_columns[p])
             self.load_per_coefficient[k : k + 6] = 1.0 / np.diag(response)
+
+    def _own_columns(self, body: int) -> np.ndarray:
+        """(3 n_p, 6) velocity at fixed body p's own points of its six unit loads."""
+        if self.fixed_columns is not None:
+            k = 6 * self.fixed_index[body]
+            return self.fixed_columns[self.ranges[body], k : k + 6]
+        units = np.diag([FORCE_UNIT] * 3 + [TORQUE_UNIT] * 3)
+        poles, point_forces = self.completion(body, units)
+        start, stop = self.geometry.body_ranges[body]
+        tensors = self.operator.point_force_tensors(self.geometry.collocation[start:stop], poles)
+        return np.einsum("tpij,lpj->til", tensors, point_forces).reshape(-1, 6)
 
     def completion(self, body: int, loads: np.ndarray):
         """Poles (7, 3) and point forces (..., 7, 3) of body p's completion for scaled loads
         (F, T) of shape (..., 6): one load case or several."""
-        start, stop = self.geometry.body_ranges[body]
-        centre = self.geometry.centres[body]
-        d = 0.25 * np.linalg.norm(self.geometry.collocation[start:stop] - centre, axis=1).min()
+        poles, d = completion_poles(self.geometry, body)
         e = np.eye(3)
-        poles = np.concatenate([centre[None], centre + d * e, centre - d * e])
         loads = np.asarray(loads, dtype=float)
         couple = np.cross(loads[..., None, 3:], e) / (4.0 * d)  # (T x e_l) / (4 d), row l
         return poles, np.concatenate([loads[..., None, :3], couple, -couple], axis=-2)
@@ -244,7 +268,7 @@ class CompletedDoubleLayer:
 
     def matvec(self, q: np.ndarray) -> np.ndarray:
         rigid = np.zeros_like(q)
-        loads = np.zeros(self.fixed_columns.shape[1])
+        loads = np.zeros(len(self.load_per_coefficient))
         for p, rows in enumerate(self.ranges):
             coefficients = self.rigid_coefficients(p, q)
             rigid[rows] = self.modes[p] @ coefficients
@@ -253,7 +277,22 @@ class CompletedDoubleLayer:
                 loads[k : k + 6] = coefficients * self.load_per_coefficient[k : k + 6]
         # (1/2 + D) annihilates rigid fields exactly; apply it to the non-rigid part only, so
         # the discretisation error of piecewise-constant rotations does not enter the motion
+        if self.treecode:
+            return self.operator.matvec(q - rigid, self.pole_forces(loads)) + rigid * self.free_dofs
         return self.operator.matvec(q - rigid) + rigid * self.free_dofs + self.fixed_columns @ loads
+
+    def pole_forces(self, loads: np.ndarray, free_loads: dict | None = None) -> np.ndarray:
+        """(7 n_bodies, 3) point forces at every body's completion poles (the operator's
+        ``point_sources``): of the fixed bodies' scaled ``loads`` (6 each, in order), or of the
+        free bodies' given loads {body: (6,)}."""
+        forces = np.zeros((7 * len(self.ranges), 3))
+        if free_loads is None:  # the load unknowns count in units of FORCE_UNIT, TORQUE_UNIT
+            units = np.array([FORCE_UNIT] * 3 + [TORQUE_UNIT] * 3)
+            free_loads = {p: loads[6 * self.fixed_index[p] : 6 * self.fixed_index[p] + 6] * units
+                          for p in np.flatnonzero(self.fixed)}
+        for p, body_loads in free_loads.items():
+            forces[7 * p : 7 * p + 7] = self.completion(p, body_loads)[1]
+        return forces
 
     def fixed_loads(self, body: int, q: np.ndarray) -> np.ndarray:
         """Scaled (F, T) of a fixed body, carried by the rigid part of its density."""
@@ -272,7 +311,7 @@ class CompletedDoubleLayer:
         modes, weighted = self.modes[body], self.modes[body].T * self.weights[rows]  # Pi = modes @ weighted
         if self.fixed[body]:
             k = 6 * self.fixed_index[body]
-            added = self.fixed_columns[rows, k : k + 6] * self.load_per_coefficient[k : k + 6]
+            added = self.own_columns[body] * self.load_per_coefficient[k : k + 6]
         else:
             added = modes
         matrix += (added - matrix @ modes) @ weighted
@@ -340,7 +379,7 @@ class MobilitySolver:
                  quadrature_order: int = 2, adaptive_quadrature: bool = True, tolerance: float | None = None,
                  max_iterations: int = 600, dtype: str = "float64", operator: str = "auto",
                  contact_refinement: float | None = None, refine_fixed_at_wall: bool = True, reuse: bool = True,
-                 precondition: bool = True, density_order: int = 2):
+                 precondition: bool = True, density_order: int = 2, treecode: TreecodeOptions | None = None):
         self.shear_rate = _finite("shear_rate", shear_rate)
         self.viscosity = _finite("viscosity", viscosity, positive=True)
         self.wall = bool(wall)
@@ -350,7 +389,10 @@ class MobilitySolver:
         self.tolerance = DEFAULT_TOLERANCE[dtype] if tolerance is None else tolerance
         self.max_iterations = max_iterations
         self.dtype = dtype
-        self.operator = operator
+        if operator not in OPERATOR_MODES:
+            raise ValueError(f"operator must be one of {OPERATOR_MODES}, got {operator!r}")
+        self.operator = operator  # "auto" is decided at the first solve, for the whole run
+        self.treecode = treecode or TreecodeOptions()
         if density_order not in DENSITY_ORDERS:
             raise ValueError(f"density_order must be one of {DENSITY_ORDERS}, got {density_order!r}")
         self.density_order = int(density_order)
@@ -409,8 +451,11 @@ class MobilitySolver:
                                                    self.contact_refinement, self.refine_fixed_at_wall,
                                                    self.density_order)
             self._warn_unresolved(geometry, length)
+            if self.operator == "auto":
+                self.operator = choose_operator(3 * geometry.n_points, self.dtype, self.device)
             double_layer = DoubleLayerOperator(geometry, self.wall, self.quadrature, self.dtype, self.device,
-                                               self.operator, reuse=previous.operator if previous else None)
+                                               self.operator, reuse=previous.operator if previous else None,
+                                               treecode=self.treecode, point_sources=all_completion_poles(geometry))
             system = CompletedDoubleLayer(geometry, double_layer, fixed, previous)
 
         rhs = np.zeros(system.size)
@@ -419,16 +464,15 @@ class MobilitySolver:
         if background:
             ambient[:, 0] = self.shear_rate * length / speed * xi[:, 2]
         rhs[:] = -ambient.ravel()
-        free_poles, free_forces = [], []
-        for p in np.flatnonzero(~fixed):
-            loads = np.concatenate([forces[p] / force_scale, torques[p] / (force_scale * length)])
-            if np.any(loads):
-                poles, point_forces = system.completion(p, loads)
-                free_poles.append(poles)
-                free_forces.append(point_forces)
-        if free_poles:
+        free_loads = {p: np.concatenate([forces[p] / force_scale, torques[p] / (force_scale * length)])
+                      for p in np.flatnonzero(~fixed)}
+        free_loads = {p: loads for p, loads in free_loads.items() if np.any(loads)}
+        if free_loads and system.treecode:
+            rhs -= double_layer.point_sources_velocity(system.pole_forces(None, free_loads)).ravel()
+        elif free_loads:
+            completions = [system.completion(p, loads) for p, loads in free_loads.items()]
             rhs -= double_layer.point_force_velocity(
-                xi, np.concatenate(free_poles), np.concatenate(free_forces)).ravel()
+                xi, np.concatenate([c[0] for c in completions]), np.concatenate([c[1] for c in completions])).ravel()
         for p in np.flatnonzero(fixed):
             rhs[system.ranges[p]] += geometry.rigid_modes(p) @ (prescribed[p] / speed)
         for p, velocity in enumerate(slip):  # U + Omega x r + w on the surface: w joins the right side
@@ -505,6 +549,7 @@ def solve_mobility(
     initial_guess=None,
     contact_refinement: float | None = None,
     density_order: int = 2,
+    treecode: TreecodeOptions | None = None,
 ) -> MobilitySolution:
     """Rigid velocities of free bodies and holding loads of fixed ones (SI units), one solve.
 
@@ -513,7 +558,9 @@ def solve_mobility(
     on free bodies (N, N m), zero rows for fixed ones. quadrature_order: Gauss points per
     direction; adaptive_quadrature: subdivide nearly singular elements; tolerance: GMRES
     relative residual (default by dtype: 1e-8 for float64, 1e-6 for float32); dtype:
-    "float64" or "float32" kernels; operator: "auto", "dense" or "matrix_free"; initial_guess: a previous solution's ``solution_vector``;
+    "float64" or "float32" kernels; operator: "dense", "matrix_free" (the direct sum), "treecode"
+    (the far field by interpolation, ``treecode``: its TreecodeOptions, hydro/treecode.py) or
+    "auto" (``operators.choose_operator``); initial_guess: a previous solution's ``solution_vector``;
     contact_refinement: split elements nearer than 1/ratio of their radius to the wall or
     another body (0: never), the ratio on the k = 4 sphere, scaled with the mesh
     (surfaces/refinement.py); None: 1.1 with density_order 2, 3.0 with 1; density_order: 2
@@ -524,5 +571,6 @@ def solve_mobility(
     solver = MobilitySolver(shear_rate, viscosity, wall, device, quadrature_order=quadrature_order,
                             adaptive_quadrature=adaptive_quadrature, tolerance=tolerance,
                             max_iterations=max_iterations, dtype=dtype, operator=operator,
-                            contact_refinement=contact_refinement, reuse=False, density_order=density_order)
+                            contact_refinement=contact_refinement, reuse=False, density_order=density_order,
+                            treecode=treecode)
     return solver.solve(bodies, forces, torques, initial_guess)

@@ -38,7 +38,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import runtime
-from .geometry import SurfaceGeometry
+from .geometry import SurfaceGeometry, basis_at_gauss_points
+from .treecode import FarField, TreecodeOptions
+
+
+def dof_indices(points: np.ndarray) -> np.ndarray:
+    """Unknown indices 3a, 3a+1, 3a+2 of the given collocation points."""
+    return (3 * np.asarray(points)[:, None] + np.arange(3)).ravel()
 
 
 @dataclass(frozen=True)
@@ -65,11 +71,25 @@ class QuadratureOptions:
             raise ValueError(f"max_level must be an integer in [0, 24], got {self.max_level!r}")
 
 
-OPERATOR_MODES = ("auto", "dense", "matrix_free")
+OPERATOR_MODES = ("auto", "dense", "matrix_free", "treecode")
 DENSITY_ORDERS = (1, 2, 3)  # collocation points per direction on an element (kernels/assembly.py)
 SINGLE_LAYERS = ("single_layer", "inverse_distance")
 # kinds whose self block follows from the rigid-translation identity of their own row sums
 IDENTITY_KINDS = ("double_layer", "elastic_rotation", "elastic_dyadic")
+
+
+DENSE_MEMORY_SHARE = 0.25  # "auto": dense while one matrix takes at most this share of the memory
+
+
+def choose_operator(size: int, dtype: str = "float64", device="cpu") -> str:
+    """The operator of a run of ``size`` unknowns, decided once from the device's total memory:
+    "dense" while the matrix takes at most DENSE_MEMORY_SHARE of it (a time-stepping run holds
+    its kept previous matrix beside the one it assembles, and the solver its factored blocks),
+    else "treecode". From the total, not the free memory: the free memory falls with the run's
+    own kept systems, and a run that chose by it switched to matrix-free part-way."""
+    itemsize = 8 if dtype == "float64" else 4
+    device = runtime.resolve_device(device)
+    return "dense" if size**2 * itemsize <= DENSE_MEMORY_SHARE * runtime.total_memory(device) else "treecode"
 
 
 class DoubleLayerOperator:
@@ -80,9 +100,12 @@ class DoubleLayerOperator:
     def __init__(self, geometry: SurfaceGeometry, wall: bool, quadrature: QuadratureOptions,
                  dtype: str = "float64", device="cpu", mode: str = "auto",
                  dense_memory_limit: float | None = None, reuse: "DoubleLayerOperator | None" = None,
-                 kind: str = "double_layer"):
+                 kind: str = "double_layer", treecode: TreecodeOptions | None = None,
+                 point_sources: np.ndarray | None = None):
         if mode not in OPERATOR_MODES:
             raise ValueError(f"operator mode must be one of {OPERATOR_MODES}, got {mode!r}")
+        if mode == "treecode" and kind != "double_layer":
+            raise ValueError(f"the treecode sums the double layer only, not {kind!r}")
         from ..kernels.assembly import build_kernels  # the top-level kernels/ folder, installed as warpbem.kernels
 
         self._wp = runtime.init()
@@ -101,7 +124,13 @@ class DoubleLayerOperator:
         matrix_bytes = self.size**2 * np.dtype(self.np_dtype).itemsize
         if dense_memory_limit is None:  # "auto": assemble while the matrix fits in half the free memory
             dense_memory_limit = 0.5 * runtime.free_memory(self.device)
-        self.mode = mode if mode != "auto" else ("dense" if matrix_bytes <= dense_memory_limit else "matrix_free")
+        if mode == "auto":
+            fits = matrix_bytes <= dense_memory_limit
+            mode = "dense" if fits else "treecode" if kind == "double_layer" else "matrix_free"
+        self.mode = mode
+        self.point_sources = np.zeros((0, 3)) if point_sources is None else np.asarray(point_sources, dtype=float)
+        self._lists = {}
+        self.far_field = self._far_field(treecode or TreecodeOptions()) if mode == "treecode" else None
         self._matrix = None
         self._diagonal = None
         self.reused_bodies = self._bodies_unchanged_since(reuse)
@@ -144,7 +173,7 @@ class DoubleLayerOperator:
             if len(rows) and len(cols):
                 r, c = indices(rows), indices(cols)
                 runtime.launch_rows(self.kernels.assemble_entries, len(rows),
-                                    lambda start, stop: [start, self.surface, r, c, matrix],
+                                    lambda start, stop: [start, self.surface, r, c, 0, matrix],
                                     self.device, extra_dim=len(cols))
         host = matrix.numpy() if self.device.is_cpu else matrix.numpy().copy()
         if self.kind not in IDENTITY_KINDS:  # self blocks: the double layer's rows sums, or Duffy's
@@ -199,9 +228,13 @@ class DoubleLayerOperator:
                                       device=self.device)
         return self._diagonal
 
-    def matvec(self, density: np.ndarray) -> np.ndarray:
-        """(1/2 + D) q for a host vector q of length 3 E; returns a float64 host vector."""
+    def matvec(self, density: np.ndarray, pole_forces: np.ndarray | None = None) -> np.ndarray:
+        """(1/2 + D) q for a host vector q of length 3 E; returns a float64 host vector. With the
+        treecode, ``pole_forces`` (one force per ``point_sources`` pole, scaled, viscosity 1) adds
+        their Stokeslets in the same sum."""
         wp = self._wp
+        if pole_forces is not None and self.mode != "treecode":
+            raise ValueError("pole forces are summed by the treecode only; use point_force_velocity")
         density = np.asarray(density, dtype=self.np_dtype)
         if self.mode == "dense":
             matrix = self.assemble()
@@ -211,17 +244,99 @@ class DoubleLayerOperator:
             out = wp.zeros(self.size, dtype=self.kernels.green.dtype, device=self.device)
             wp.launch(self.kernels.dense_matvec, dim=self.size, inputs=[matrix, x, out], device=self.device)
             return out.numpy().astype(np.float64)
+        return self._listed_sum(density) if self.mode == "matrix_free" else self._treecode_matvec(density, pole_forces)
+
+    def _device_lists(self, name: str, group, starts, items):
+        """Device copies of one group/CSR list triple (``apply_matrix_free``), made once."""
+        if name not in self._lists:
+            wp = self._wp
+            self._lists[name] = tuple(wp.array(np.ascontiguousarray(a, dtype=np.int32), dtype=int, device=self.device)
+                                      for a in (group, starts, items))
+        return self._lists[name]
+
+    def _listed_sum(self, density: np.ndarray, lists: str = "direct") -> np.ndarray:
+        """The element integrals of the listed elements of each point's group, and the self
+        blocks: all elements for the direct sum, the near field for the treecode."""
+        wp = self._wp
         diagonal = self._self_blocks()
         n = self.geometry.n_points
+        if lists == "direct":
+            group, starts, items = self._device_lists("direct", np.zeros(n), [0, self.geometry.n_elements],
+                                                      np.arange(self.geometry.n_elements))
+        else:
+            group, starts, items = self._lists[lists]
         vec3 = self.kernels.green.vec3
         q = wp.array(density.reshape(n, 3), dtype=vec3, device=self.device)
         out = wp.zeros(n, dtype=vec3, device=self.device)
         runtime.launch_rows(
             self.kernels.apply_matrix_free, n,
-            lambda start, stop: [start, self.surface, diagonal, q, out[start:stop]],
+            lambda start, stop: [start, self.surface, diagonal, q, group, starts, items, out[start:stop]],
             self.device,
         )
         return out.numpy().reshape(-1).astype(np.float64)
+
+    def _far_field(self, options: TreecodeOptions) -> FarField:
+        """The treecode of this geometry and its near lists (``treecode.py``)."""
+        geo = self.geometry
+        n_qp = geo.qp_positions.shape[1]
+        far = FarField(self.kernels, self.device, geo.element_nodes[:, 8], geo.element_radius, geo.collocation,
+                       np.arange(geo.n_points) // geo.points_per_element, geo.qp_positions.reshape(-1, 3),
+                       np.repeat(np.arange(geo.n_elements), n_qp), self.point_sources, options)
+        group = far.group_of_target
+        self._near_elements = far.near_lists(far.leaf_of_element)
+        self._device_lists("near_elements", group, *self._near_elements)
+        self._device_lists("near_poles", group, *far.near_lists(far.leaf_of_pole))
+        m = geo.points_per_element
+        counts = far.targets["stops"] - far.targets["starts"]
+        near_bytes = 9 * m * int(counts @ np.diff(self._near_elements[0])) * np.dtype(self.np_dtype).itemsize
+        limit = options.near_memory_fraction * runtime.total_memory(self.device)
+        self.near_field_stored = options.near_field == "stored" or (options.near_field == "auto" and near_bytes <= limit)
+        self.near_field_bytes = near_bytes
+        self._near_blocks = None
+        return far
+
+    def near_blocks(self) -> list:
+        """The treecode's near field assembled once, per occupied leaf: (its points' unknowns,
+        its near elements' unknowns, the dense block between them), self blocks left out."""
+        if self._near_blocks is None:
+            wp = self._wp
+            geo, seg = self.geometry, self.far_field.targets
+            starts, elements = self._near_elements
+            m = geo.points_per_element
+            self._near_blocks = []
+            for g, (a, b) in enumerate(zip(seg["starts"], seg["stops"])):
+                rows = seg["order"][a:b]
+                cols = elements[starts[g] : starts[g + 1]]
+                block = wp.empty((3 * len(rows), 3 * m * len(cols)), dtype=self.kernels.green.dtype, device=self.device)
+                r = wp.array(rows.astype(np.int32), dtype=int, device=self.device)
+                c = wp.array(cols.astype(np.int32), dtype=int, device=self.device)
+                runtime.launch_rows(self.kernels.assemble_entries, len(rows),
+                                    lambda start, stop: [start, self.surface, r, c, 1, block], self.device,
+                                    extra_dim=len(cols))
+                points = (m * cols[:, None] + np.arange(m)).ravel()
+                self._near_blocks.append((dof_indices(rows), dof_indices(points), block, block.numpy()))
+        return self._near_blocks
+
+    def _stored_near_sum(self, density: np.ndarray) -> np.ndarray:
+        n = self.geometry.n_points
+        out = np.einsum("aij,aj->ai", self._self_blocks().numpy(), density.reshape(n, 3)).ravel().astype(np.float64)
+        for rows, cols, unused, block in self.near_blocks():
+            out[rows] += block @ density[cols]
+        return out
+
+    def _treecode_matvec(self, density: np.ndarray, pole_forces) -> np.ndarray:
+        """Near field exactly (element integrals, self blocks), far field by the treecode, of the
+        double layer and of the point forces at ``point_sources`` (one force (3,) per pole)."""
+        geo = self.geometry
+        out = self._stored_near_sum(density) if self.near_field_stored else self._listed_sum(density, "near_elements")
+        m = geo.points_per_element
+        values = density.astype(np.float64).reshape(geo.n_elements, m, 3)
+        at_qp = np.einsum("ql,eli->eqi", basis_at_gauss_points(geo.density_order, geo.order), values)
+        strengths = np.einsum("eqk,eqi->eqki", geo.qp_area_vectors, at_qp).reshape(-1, 9)
+        if pole_forces is not None:
+            pole_forces = np.asarray(pole_forces, dtype=np.float64).reshape(-1, 3)
+            out += self._pole_sum(self.geometry.collocation, self.point_sources, pole_forces, "near_poles").ravel()
+        return out + self.far_field.apply(strengths, pole_forces).ravel()
 
     def point_force_tensors(self, targets: np.ndarray, poles: np.ndarray) -> np.ndarray:
         """(T, P, 3, 3) Green's tensors G(target, pole) (scaled units, viscosity 1): the
@@ -239,14 +354,29 @@ class DoubleLayerOperator:
 
     def point_force_velocity(self, targets: np.ndarray, poles: np.ndarray, forces: np.ndarray) -> np.ndarray:
         """sum_p G(target, pole_p) force_p at every target (scaled units, viscosity 1)."""
+        n = len(targets)
+        lists = (np.zeros(n), [0, len(poles)], np.arange(len(poles)))
+        return self._pole_sum(targets, poles, forces, lists)
+
+    def point_sources_velocity(self, pole_forces: np.ndarray) -> np.ndarray:
+        """(n_points, 3) velocity (scaled, viscosity 1) at the collocation points of forces at
+        the ``point_sources`` (treecode: near poles directly, far ones by the tree)."""
+        pole_forces = np.asarray(pole_forces, dtype=np.float64).reshape(-1, 3)
+        near = self._pole_sum(self.geometry.collocation, self.point_sources, pole_forces, "near_poles")
+        return near + self.far_field.apply(np.zeros((self.far_field.n_qp, 9)), pole_forces)
+
+    def _pole_sum(self, targets, poles, forces, lists) -> np.ndarray:
+        """sum over each target's listed poles (a name of ``_lists`` or a triple) of G f."""
         wp = self._wp
         vec3 = self.kernels.green.vec3
+        group, starts, items = self._lists[lists] if isinstance(lists, str) else (
+            wp.array(np.ascontiguousarray(a, dtype=np.int32), dtype=int, device=self.device) for a in lists)
         t = wp.array(np.ascontiguousarray(targets), dtype=vec3, device=self.device)
         p = wp.array(np.ascontiguousarray(poles), dtype=vec3, device=self.device)
         f = wp.array(np.ascontiguousarray(forces), dtype=vec3, device=self.device)
         out = wp.zeros(len(targets), dtype=vec3, device=self.device)
         runtime.launch_rows(
             self.kernels.point_force_velocity, len(targets),
-            lambda start, stop: [start, t, p, f, out[start:stop]], self.device,
+            lambda start, stop: [start, t, p, f, group, starts, items, out[start:stop]], self.device,
         )
         return out.numpy().astype(np.float64)

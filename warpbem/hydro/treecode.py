@@ -1,0 +1,360 @@
+"""Fast summation of the far field of the double layer and of point forces above the wall.
+
+The operator's product sums, at every collocation point x_a, the element integrals of all
+elements (``kernels/assembly.py``). Far from x_a an element integral is its plain Gauss sum,
+so the far field is a sum over quadrature points y_s with strengths Q_s = q(y_s) (x) n_s w_s
+(the double layer is linear in n dS), plus the completion's point forces F at their poles:
+
+    u_j(x) = sum_s Sigma_ijk(y_s, x) Q_s,ik + sum_poles G_ji(x, y) F_i.
+
+This module evaluates that far field by interpolation on a tree of boxes, in the manner of the
+black-box fast multipole method (Fong & Darve 2009, J. Comput. Phys. 228, 8712), which, like the
+barycentric Lagrange treecode (Wang, Krasny & Tlupova 2020, Commun. Comput. Phys. 28, 1415),
+needs nothing of the kernel but its values, so the Blake (1971) wall images come for free:
+
+* boxes: a uniform quadtree in the wall's plane (x, y), every box spanning the whole height
+  range of the scene, so its domain is [box +- margin] x [z_lo, z_hi], with the margin the
+  largest element radius (an element belongs to the box of its centre, its points lie within
+  the margin). Leaves are no narrower than the height range, so no box is taller than wide;
+* in each box, p x p x p Chebyshev points (first kind; p, ``TreecodeOptions.order``, is the one
+  error parameter), the far field of its sources represented by strengths at them
+  (anterpolation: Q_m = sum_s L_m(y_s) Q_s with L_m the tensor Lagrange basis), and the far
+  field felt in the box by the velocities at them (interpolated to the targets by L_m(x));
+* the kernel is translation invariant along the wall (it depends on x1 - y1, x2 - y2, x3, y3)
+  and every box of a level has the same Chebyshev points up to a lateral shift, so the
+  interactions between a box's points and those of a box of its interaction list (the
+  children of its parent's neighbours that are not its own neighbours: at most 40 offsets per
+  level) are 40 matrices per level, computed once by a Warp kernel and applied with BLAS;
+* the near field, a leaf's own and its 8 neighbours' elements, is left to the exact element
+  integrals (adaptive, self terms: ``DoubleLayerOperator``), the points of a leaf sharing one
+  list of near elements.
+
+Interpolation with p points per direction converges geometrically in p for kernels analytic
+away from the sources (Fong & Darve 2009, eq. 7-9); the error measured against the direct sum
+is tabulated in the README ("Large arrays") and checked in ``tests/unit/test_treecode.py``.
+Poles below the boxes' interpolation in z do not exist: the wall images x* lie below z = 0,
+at least as far from a source box as x itself (|y - x*| >= |y - x| for y3, x3 > 0).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import runtime
+
+NEAR_FIELD_MODES = ("auto", "stored", "recomputed")
+STRENGTHS = 12  # per source: 9 double-layer components (density (x) area vector), 3 of a point force
+
+
+@dataclass(frozen=True)
+class TreecodeOptions:
+    """order: Chebyshev points per direction in each box (error falls geometrically with it;
+    README "Large arrays"); min_leaf_side: the narrowest leaf, in scaled units (lengths / the
+    mean cell radius), at least the scene's height range in any case; near_field: "stored"
+    (the exact near-field blocks assembled once and applied with BLAS), "recomputed" (their
+    element integrals recomputed in every product, memory O(N) with a small constant), or
+    "auto": stored while they take at most ``near_memory_fraction`` of the device's memory."""
+
+    order: int = 6
+    min_leaf_side: float = 0.0
+    near_field: str = "auto"
+    near_memory_fraction: float = 0.25
+
+    def __post_init__(self):
+        if self.near_field not in NEAR_FIELD_MODES:
+            raise ValueError(f"near_field must be one of {NEAR_FIELD_MODES}, got {self.near_field!r}")
+        if not 0 <= self.near_memory_fraction <= 1:
+            raise ValueError(f"near_memory_fraction must be in [0, 1], got {self.near_memory_fraction!r}")
+        if int(self.order) != self.order or not 2 <= self.order <= 12:
+            raise ValueError(f"treecode order must be an integer in [2, 12], got {self.order!r}")
+        if not np.isfinite(self.min_leaf_side) or self.min_leaf_side < 0:
+            raise ValueError(f"min_leaf_side must be >= 0, got {self.min_leaf_side!r}")
+
+
+def chebyshev_points(p: int) -> np.ndarray:
+    """The p Chebyshev points of the first kind on [-1, 1]."""
+    return np.cos((2 * np.arange(p) + 1) * np.pi / (2 * p))
+
+
+def lagrange_basis(u: np.ndarray, p: int) -> np.ndarray:
+    """(len(u), p) Lagrange basis on the Chebyshev points at u in [-1, 1], by the barycentric
+    formula (Berrut & Trefethen 2004, eq. 4.2 with the first-kind weights of eq. 5.3)."""
+    nodes = chebyshev_points(p)
+    weights = (-1.0) ** np.arange(p) * np.sin((2 * np.arange(p) + 1) * np.pi / (2 * p))
+    diff = np.asarray(u, dtype=float)[:, None] - nodes[None, :]
+    exact = diff == 0.0
+    diff[exact] = 1.0
+    terms = weights / diff
+    basis = terms / terms.sum(axis=1, keepdims=True)
+    hit = exact.any(axis=1)
+    basis[hit] = exact[hit].astype(float)
+    return basis
+
+
+class LateralTree:
+    """The quadtree of boxes (module docstring): levels 0 (one box) to ``levels``, box (i, j) of
+    level l covering [x0 + i s_l, x0 + (i + 1) s_l] x [y0 + j s_l, ...], s_l = side / 2^l."""
+
+    def __init__(self, element_centres: np.ndarray, extra_points: np.ndarray, margins: dict,
+                 z_range: tuple, min_leaf_side: float):
+        lateral = np.concatenate([element_centres[:, :2], extra_points[:, :2]])
+        self.origin = lateral.min(axis=0)
+        extent = float((lateral.max(axis=0) - self.origin).max())
+        self.margins = margins  # {"sources": ..., "targets": ...}: lateral reach beyond a box
+        self.z_range = (float(z_range[0]), float(z_range[1]))
+        height = self.z_range[1] - self.z_range[0]
+        leaf = max(height, min_leaf_side, 1e-12)
+        self.side = max(extent * (1.0 + 1e-9), leaf)
+        self.levels = int(np.floor(np.log2(self.side / leaf)))
+
+    def box_side(self, level: int) -> float:
+        return self.side / 2**level
+
+    def leaf_of(self, points: np.ndarray) -> np.ndarray:
+        """(n, 2) integer leaf indices (i, j) of lateral positions."""
+        n = 2**self.levels
+        index = np.floor((points[:, :2] - self.origin) / self.box_side(self.levels)).astype(int)
+        return np.clip(index, 0, n - 1)
+
+    def box_centre(self, level: int, index: np.ndarray) -> np.ndarray:
+        return self.origin + (np.asarray(index) + 0.5) * self.box_side(level)
+
+    def half_widths(self, level: int, side: str) -> np.ndarray:
+        """(3,) half widths of the interpolation domain of every box of ``level`` for its
+        ``side`` ("sources" or "targets")."""
+        lateral = 0.5 * self.box_side(level) + self.margins[side]
+        return np.array([lateral, lateral, 0.5 * (self.z_range[1] - self.z_range[0])])
+
+    def local_coordinates(self, level: int, index: np.ndarray, points: np.ndarray, side: str) -> np.ndarray:
+        """Points mapped to [-1, 1]^3 of the domains of their boxes ``index`` (n, 2)."""
+        centre = np.column_stack([self.box_centre(level, index), np.full(len(index), 0.5 * sum(self.z_range))])
+        return (points - centre) / self.half_widths(level, side)
+
+
+def interaction_offsets(level_parity: tuple) -> list:
+    """Offsets (di, dj) of the boxes of the interaction list of a box of parity (i % 2, j % 2):
+    children of its parent's neighbours (|parent offset| <= 1) that are not its neighbours."""
+    pi, pj = level_parity
+    out = []
+    for di in range(-3, 4):
+        for dj in range(-3, 4):
+            if max(abs(di), abs(dj)) <= 1:
+                continue
+            if abs((pi + di) // 2) <= 1 and abs((pj + dj) // 2) <= 1:
+                out.append((di, dj))
+    return out
+
+
+class FarField:
+    """The far field at the collocation points of sources at the quadrature points of the
+    elements and at point-force poles, for one geometry (module docstring).
+
+    element_of_target / element_of_source: the element each target / quadrature source belongs
+    to (their box is that of its centre); poles: (P, 3) point-force positions (their own box)."""
+
+    def __init__(self, kernels, device, element_centres, element_radius, targets, element_of_target,
+                 sources, element_of_source, poles, options: TreecodeOptions):
+        self.options = options
+        self.kernels = kernels
+        self.device = device
+        p = options.order
+        self.order = p
+        self.dtype = np.float64 if kernels.green.dtype == runtime.init().float64 else np.float32
+        all_points = np.concatenate([targets, sources, poles])
+        # an element's points lie in its box widened by their largest lateral offset from its centre
+        margins = {side: float(np.linalg.norm(points[:, :2] - element_centres[owner, :2], axis=1).max(initial=0.0))
+                   for side, points, owner in (("sources", sources, element_of_source),
+                                               ("targets", targets, element_of_target))}
+        self.tree = tree = LateralTree(element_centres, poles, margins,
+                                       (all_points[:, 2].min(), all_points[:, 2].max()), options.min_leaf_side)
+        n = 2**tree.levels
+        leaf_of_element = tree.leaf_of(element_centres)
+        self.leaf_of_element = leaf_of_element[:, 0] * n + leaf_of_element[:, 1]
+        target_leaf = leaf_of_element[element_of_target]
+        source_leaf = np.concatenate([leaf_of_element[element_of_source], tree.leaf_of(poles)])
+        self.n_qp, self.n_poles = len(sources), len(poles)
+        self.targets = self._segments(target_leaf, targets, n, "targets")
+        self.sources = self._segments(source_leaf, np.concatenate([sources, poles]), n, "sources")
+        self.has_far_field = tree.levels >= 2
+        if self.has_far_field:
+            self.transfer = {side: [self._child_interpolation(level, side) for level in range(tree.levels)]
+                             for side in ("sources", "targets")}
+            self.interactions = {level: self._interaction_matrices(level) for level in range(2, tree.levels + 1)}
+            self.occupied = self._occupied_boxes()
+
+    def _segments(self, leaf: np.ndarray, points: np.ndarray, n: int, side: str) -> dict:
+        """Points sorted by leaf, with each occupied leaf's range and interpolation weights."""
+        flat = leaf[:, 0] * n + leaf[:, 1]
+        order = np.argsort(flat, kind="stable")
+        boxes, starts = np.unique(flat[order], return_index=True)
+        stops = np.append(starts[1:], len(order))
+        p, level = self.order, self.tree.levels
+        u = self.tree.local_coordinates(level, leaf[order], points[order], side)
+        lx, ly, lz = (lagrange_basis(u[:, k], p) for k in range(3))
+        lateral = (lx[:, :, None] * ly[:, None, :]).reshape(len(order), p * p)
+        return dict(order=order, boxes=boxes, starts=starts, stops=stops, lateral=lateral, vertical=lz)
+
+    def _child_interpolation(self, level: int, side: str) -> np.ndarray:
+        """(2, p, p) T[c, a, A]: the parent's basis A (level) at the child's point a (level + 1),
+        c the child's position in the parent along one lateral direction."""
+        nodes = chebyshev_points(self.order)
+        parent, child = self.tree.half_widths(level, side)[0], self.tree.half_widths(level + 1, side)[0]
+        quarter = 0.25 * self.tree.box_side(level)
+        return np.stack([lagrange_basis((sign * quarter + nodes * child) / parent, self.order) for sign in (-1, 1)])
+
+    def _proxies(self, level: int, side: str, shift=(0, 0)) -> np.ndarray:
+        """(p^3, 3) Chebyshev points of the domain of box ``shift`` relative to a box centred at
+        the lateral origin, index (a p + b) p + c for (x, y, z)."""
+        nodes = chebyshev_points(self.order)
+        half = self.tree.half_widths(level, side)
+        width = self.tree.box_side(level)
+        x, y, z = np.meshgrid(nodes * half[0] + shift[0] * width, nodes * half[1] + shift[1] * width,
+                              nodes * half[2] + 0.5 * sum(self.tree.z_range), indexing="ij")
+        return np.column_stack([x.ravel(), y.ravel(), z.ravel()])
+
+    def _interaction_matrices(self, level: int) -> dict:
+        """{(di, dj): (3 p^3, 12 p^3) velocities at a box's points per unit strength at the points
+        of the box offset by (di, dj)}, for the offsets that occur (up to 40)."""
+        wp = runtime.init()
+        vec3 = self.kernels.green.vec3
+        dtype = self.kernels.green.dtype
+        targets = wp.array(self._proxies(level, "targets"), dtype=vec3, device=self.device)
+        size = self.order**3
+        out = {}
+        offsets = sorted({o for parity in ((0, 0), (0, 1), (1, 0), (1, 1)) for o in interaction_offsets(parity)})
+        for offset in offsets:
+            sources = wp.array(self._proxies(level, "sources", offset), dtype=vec3, device=self.device)
+            matrix = wp.empty((3 * size, STRENGTHS * size), dtype=dtype, device=self.device)
+            runtime.launch_rows(self.kernels.proxy_interactions, size,
+                                lambda start, stop: [start, targets, sources, matrix], self.device, extra_dim=size)
+            # kept as the kernel wrote it: a converted copy of every fresh page took 20 times as
+            # long as the kernel on the CPU (fresh memory is slow to fault in on these machines)
+            out[offset] = (matrix, matrix.numpy())
+        return out
+
+    def _occupied_boxes(self) -> list:
+        """Per level: boolean (n, n) grids of boxes holding sources and of boxes holding targets."""
+        out = []
+        for level in range(self.tree.levels + 1):
+            n = 2**level
+            shrink = 2 ** (self.tree.levels - level)
+            grids = []
+            for seg in (self.sources, self.targets):
+                leaf = seg["boxes"]
+                i, j = leaf // 2**self.tree.levels // shrink, leaf % 2**self.tree.levels // shrink
+                grid = np.zeros((n, n), dtype=bool)
+                grid[i, j] = True
+                grids.append(grid)
+            out.append(grids)
+        return out
+
+    @property
+    def group_of_target(self) -> np.ndarray:
+        """The occupied leaf (its index in ``near_lists``) of every target, in the given order."""
+        seg = self.targets
+        group = np.empty(len(seg["order"]), dtype=np.int32)
+        group[seg["order"]] = np.repeat(np.arange(len(seg["boxes"])), seg["stops"] - seg["starts"])
+        return group
+
+    def near_lists(self, leaf_of_item: np.ndarray):
+        """CSR lists (starts, items) of the items (elements or poles, by their flat leaf index)
+        in each occupied target leaf's own and 8 neighbouring leaves: its near field, the part
+        the far field leaves out."""
+        n = 2**self.tree.levels
+        order = np.argsort(leaf_of_item, kind="stable")
+        sorted_leaves = leaf_of_item[order]
+        lists = []
+        for box in self.targets["boxes"]:
+            i, j = divmod(int(box), n)
+            chunks = []
+            for di in (-1, 0, 1):
+                if 0 <= i + di < n:
+                    lo = (i + di) * n + max(j - 1, 0)
+                    hi = (i + di) * n + min(j + 1, n - 1)
+                    a, b = np.searchsorted(sorted_leaves, [lo, hi + 1])
+                    chunks.append(order[a:b])
+            lists.append(np.sort(np.concatenate(chunks)))
+        starts = np.concatenate([[0], np.cumsum([len(c) for c in lists])]).astype(np.int32)
+        return starts, np.concatenate(lists).astype(np.int32)
+
+    @property
+    def leaf_of_pole(self) -> np.ndarray:
+        seg = self.sources
+        flat = np.empty(len(seg["order"]), dtype=np.int64)
+        flat[seg["order"]] = np.repeat(seg["boxes"], seg["stops"] - seg["starts"])
+        return flat[self.n_qp :]
+
+    def apply(self, qp_strengths: np.ndarray, pole_forces: np.ndarray | None = None) -> np.ndarray:
+        """(T, 3) far-field velocity (times viscosity) at the targets of quadrature-point
+        strengths (n_qp, 9) and pole forces (n_poles, 3), in the targets' given order."""
+        n_targets = len(self.targets["order"])
+        if not self.has_far_field:
+            return np.zeros((n_targets, 3))
+        p, levels = self.order, self.tree.levels
+        size = p**3
+        strengths = np.zeros((self.n_qp + self.n_poles, STRENGTHS))
+        strengths[: self.n_qp, :9] = qp_strengths
+        if pole_forces is not None:
+            strengths[self.n_qp :, 9:] = pole_forces
+        n = 2**levels
+        multipoles = [None] * (levels + 1)
+        leaf = np.zeros((n * n, p * p, p * STRENGTHS))
+        seg = self.sources
+        w = strengths[seg["order"]]
+        for box, a, b in zip(seg["boxes"], seg["starts"], seg["stops"]):  # anterpolation (P2M)
+            vertical = (seg["vertical"][a:b, :, None] * w[a:b, None, :]).reshape(b - a, p * STRENGTHS)
+            leaf[box] = seg["lateral"][a:b].T @ vertical
+        multipoles[levels] = leaf.reshape(n, n, p, p, p * STRENGTHS)
+        for level in range(levels - 1, 1, -1):  # children to parents (M2M)
+            multipoles[level] = self._to_parent(multipoles[level + 1], self.transfer["sources"][level])
+        locals_ = [None] * (levels + 1)
+        for level in range(2, levels + 1):
+            m = 2**level
+            local = np.zeros((m, m, size * 3))
+            source_grid, target_grid = self.occupied[level]
+            flat = multipoles[level].reshape(m, m, size * STRENGTHS).astype(self.dtype, copy=False)
+            ii, jj = np.meshgrid(np.arange(m), np.arange(m), indexing="ij")
+            for offset, (unused, matrix) in self.interactions[level].items():  # M2L
+                di, dj = offset
+                si, sj = ii + di, jj + dj
+                ok = (si >= 0) & (si < m) & (sj >= 0) & (sj < m) & target_grid
+                ok &= (np.abs(si // 2 - ii // 2) <= 1) & (np.abs(sj // 2 - jj // 2) <= 1)
+                ok[ok] &= source_grid[si[ok], sj[ok]]
+                if ok.any():
+                    local[ok] += flat[si[ok], sj[ok]] @ matrix.T
+            local = local.reshape(m, m, p, p, p * 3)
+            if locals_[level - 1] is not None:  # parents to children (L2L)
+                local += self._to_children(locals_[level - 1], self.transfer["targets"][level - 1])
+            locals_[level] = local
+        values = locals_[levels].reshape(n * n, p * p, p * 3)
+        out = np.zeros((n_targets, 3))
+        seg = self.targets
+        sorted_out = np.zeros((n_targets, 3))
+        for box, a, b in zip(seg["boxes"], seg["starts"], seg["stops"]):  # interpolation (L2P)
+            u = (seg["lateral"][a:b] @ values[box]).reshape(b - a, p, 3)
+            sorted_out[a:b] = np.einsum("tc,tcj->tj", seg["vertical"][a:b], u)
+        out[seg["order"]] = sorted_out
+        return out
+
+    @staticmethod
+    def _to_parent(children: np.ndarray, transfer: np.ndarray) -> np.ndarray:
+        """Parents' strengths from their children's: sum over the children c of T[c]^T x T[c]^T."""
+        n2 = children.shape[0]
+        c = children.reshape(n2 // 2, 2, n2 // 2, 2, *children.shape[2:])
+        out = 0.0
+        for cx in (0, 1):
+            for cy in (0, 1):
+                out = out + np.einsum("aA,bB,ijabz->ijABz", transfer[cx], transfer[cy], c[:, cx, :, cy], optimize=True)
+        return out
+
+    @staticmethod
+    def _to_children(parents: np.ndarray, transfer: np.ndarray) -> np.ndarray:
+        """Children's velocities at their points interpolated from their parents'."""
+        n = parents.shape[0]
+        out = np.zeros((n, 2, n, 2, *parents.shape[2:]))
+        for cx in (0, 1):
+            for cy in (0, 1):
+                out[:, cx, :, cy] = np.einsum("aA,bB,ijABz->ijabz", transfer[cx], transfer[cy], parents, optimize=True)
+        return out.reshape(2 * n, 2 * n, *parents.shape[2:])
