@@ -1,18 +1,21 @@
-"""Scale: N cells of 96 elements, time per operator apply and per solve, assembled vs
-matrix-free, against a plain NumPy apply of the same operator and BLAS on the assembled matrix
-(the memory-bandwidth floor). Everything is measured side by side in one run; ratios are what
-to read (the machines are shared and noisy).
+"""Scale: N cells of 96 elements, time per operator product and per solve, and memory, for the
+assembled (dense) operator, the direct matrix-free sum and the treecode, against a plain NumPy
+product of the same operator and BLAS on the assembled matrix (the memory-bandwidth floor).
+Everything is measured side by side in one run; ratios and growth exponents are what to read
+(the machines are shared and noisy).
 
 Cells: unit spheres on a square grid 3 radii apart, centres 1.5 radii above the wall, shear
-flow; contact refinement off so each cell keeps its 96 elements. The Warp/NumPy ratio uses
-the operator without adaptive subdivision, which the NumPy baseline does not have; the
-default (adaptive) Warp operator is timed too.
+flow; contact refinement off so each cell keeps its 96 elements; constant density (p = 1). The
+Warp/NumPy ratio uses the operator without adaptive subdivision, which the NumPy baseline does
+not have; every other column is the default (adaptive) operator. The treecode's error is that
+of a product with a random density against the direct sum: all points up to --direct-max cells,
+beyond that --sample random points (their rows of the direct sum assembled).
 
-    python benchmarks/scale.py [--counts 1 2 8 32 128] [--device cpu] [--numpy-max 32]
-                               [--solve-max 32] [--dense-max-gb 4]
+    python benchmarks/scale.py [--counts 8 16 32 64 128 256 512 1024] [--device cpu]
+                               [--orders 6 7] [--numpy-max 32] [--direct-max 128]
+                               [--solve-max 32] [--treecode-solve-max 1024] [--dense-max-gb 3]
 """
 
-import argparse
 import resource
 import time
 import warnings
@@ -20,10 +23,11 @@ import warnings
 import numpy as np
 
 import numpy_baseline
-from common import best_time, output, print_table, pyplot, write_csv
+from common import arguments, best_time, output, print_table, pyplot, save_chart, write_csv
 from warpbem import Body, ContactResolutionWarning, MobilitySolver, mesh, runtime
 from warpbem.hydro.geometry import SurfaceGeometry
 from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions
+from warpbem.hydro.treecode import TreecodeOptions
 
 
 def cpu_seconds():
@@ -45,15 +49,45 @@ def cells(n):
     return [Body(sphere, position=(3.0 * (i % side), 3.0 * (i // side), 1.5)) for i in range(n)]
 
 
+def direct_rows(operator: DoubleLayerOperator, q: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Rows of the direct product (1/2 + D) q at the given collocation points: their rows of
+    the matrix assembled (all elements) and applied, with their self blocks."""
+    wp = runtime.init()
+    geo = operator.geometry
+    device = operator.device
+    block = wp.empty((3 * len(points), 3 * geo.n_points), dtype=operator.kernels.green.dtype, device=device)
+    rows = wp.array(points.astype(np.int32), dtype=int, device=device)
+    cols = wp.array(np.arange(geo.n_elements, dtype=np.int32), dtype=int, device=device)
+    runtime.launch_rows(operator.kernels.assemble_entries, len(points),
+                        lambda start, stop: [start, operator.surface, rows, cols, 1, block], device,
+                        extra_dim=geo.n_elements)
+    own = np.einsum("aij,aj->ai", operator._self_blocks().numpy()[points], q.reshape(-1, 3)[points]).ravel()
+    return block.numpy() @ q + own
+
+
+def growth(rows, key, smallest=64):
+    """Exponent of a power law fitted to key(N) over N >= smallest (nan with fewer than 2)."""
+    pts = [(r["cells"], r[key]) for r in rows if r["cells"] >= smallest and np.isfinite(r.get(key, np.nan))]
+    if len(pts) < 2:
+        return float("nan")
+    n, t = np.log(np.array(pts)).T
+    return float(np.polyfit(n, t, 1)[0])
+
+
 def main():
     warnings.simplefilter("ignore", ContactResolutionWarning)  # refinement is off on purpose
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--counts", type=int, nargs="+", default=[1, 2, 8, 32, 128])
-    parser.add_argument("--device", default="cpu")
+    parser = arguments(__doc__.splitlines()[0])
+    parser.add_argument("--counts", type=int, nargs="+", default=[8, 16, 32, 64, 128, 256, 512, 1024])
+    parser.add_argument("--orders", type=int, nargs="+", default=[6, 7], help="treecode orders")
     parser.add_argument("--numpy-max", type=int, default=32, help="largest N for the NumPy baseline")
-    parser.add_argument("--solve-max", type=int, default=32, help="largest N for full solves")
-    parser.add_argument("--dense-max-gb", type=float, default=4.0, help="largest assembled matrix")
+    parser.add_argument("--direct-max", type=int, default=128, help="largest N for the direct matrix-free sum")
+    parser.add_argument("--solve-max", type=int, default=32, help="largest N for dense and direct solves")
+    parser.add_argument("--treecode-solve-max", type=int, default=1024, help="largest N for treecode solves")
+    parser.add_argument("--dense-max-gb", type=float, default=3.0, help="largest assembled matrix")
+    parser.add_argument("--sample", type=int, default=400, help="points of the sampled error beyond --direct-max")
     args = parser.parse_args()
+    if args.quick:
+        args.counts, args.orders = [8, 64], [6]
     device = runtime.resolve_device(args.device)
     rows = []
     for n in args.counts:
@@ -62,68 +96,106 @@ def main():
         q = np.random.default_rng(n).standard_normal(3 * geometry.n_elements)
         matrix_gb = (3 * geometry.n_elements) ** 2 * 8 / 1e9
         row = dict(cells=n, elements=geometry.n_elements, matrix_GB=matrix_gb)
-        plain = DoubleLayerOperator(geometry, True, QuadratureOptions(adaptive=False), device=device,
-                                    mode="matrix_free")
-        plain.matvec(q)  # compile, self blocks
-        row["warp_free_apply_s"], row["cores_free_apply"] = cores_busy(lambda: plain.matvec(q))
-        adaptive = DoubleLayerOperator(geometry, True, QuadratureOptions(), device=device, mode="matrix_free")
-        adaptive.matvec(q)
-        row["warp_free_adaptive_apply_s"] = best_time(lambda: adaptive.matvec(q), 1)
-        if n <= args.numpy_max:
-            row["numpy_apply_s"] = best_time(lambda: numpy_baseline.apply(geometry, q, True), 1)
-            row["numpy_over_warp"] = row["numpy_apply_s"] / row["warp_free_apply_s"]
-            row["max_abs_diff"] = float(np.abs(numpy_baseline.apply(geometry, q, True) - plain.matvec(q)).max())
+        reference = None
+        if n <= args.direct_max:
+            plain = DoubleLayerOperator(geometry, True, QuadratureOptions(adaptive=False), device=device,
+                                        mode="matrix_free")
+            plain.matvec(q)  # compile, self blocks
+            row["warp_free_apply_s"], row["cores_free_apply"] = cores_busy(lambda: plain.matvec(q))
+            adaptive = DoubleLayerOperator(geometry, True, QuadratureOptions(), device=device, mode="matrix_free")
+            reference = adaptive.matvec(q)
+            row["direct_product_s"] = best_time(lambda: adaptive.matvec(q), 1)
+            if n <= args.numpy_max:
+                row["numpy_apply_s"] = best_time(lambda: numpy_baseline.apply(geometry, q, True), 1)
+                row["numpy_over_warp"] = row["numpy_apply_s"] / row["warp_free_apply_s"]
+                row["max_abs_diff"] = float(np.abs(numpy_baseline.apply(geometry, q, True) - plain.matvec(q)).max())
         if matrix_gb <= args.dense_max_gb:
             dense = DoubleLayerOperator(geometry, True, QuadratureOptions(), device=device, mode="dense")
             row["assembly_s"], row["cores_assembly"] = cores_busy(dense.assemble)
-            row["dense_apply_s"] = best_time(lambda: dense.matvec(q), 3)  # BLAS A @ x: the floor
-            row["free_over_dense_apply"] = row["warp_free_adaptive_apply_s"] / row["dense_apply_s"]
-        if n <= args.solve_max:
-            for mode in ("dense", "matrix_free"):
-                if mode == "dense" and matrix_gb > args.dense_max_gb:
-                    continue
+            row["dense_product_s"] = best_time(lambda: dense.matvec(q), 3)  # BLAS A @ x: the floor
+            if reference is not None:
+                row["free_over_dense_apply"] = row["direct_product_s"] / row["dense_product_s"]
+            del dense
+        sample = None
+        for order in args.orders:
+            t = time.perf_counter()
+            tree = DoubleLayerOperator(geometry, True, QuadratureOptions(), device=device, mode="treecode",
+                                       treecode=TreecodeOptions(order=order))
+            tree.matvec(q)  # the first product assembles the stored near field
+            row[f"tree{order}_setup_s"] = time.perf_counter() - t
+            out = tree.matvec(q)
+            row[f"tree{order}_product_s"] = best_time(lambda: tree.matvec(q), 2)
+            row[f"tree{order}_GB"] = (tree.near_field_bytes * tree.near_field_stored
+                                      + tree.far_field.memory_bytes) / 1e9
+            if reference is not None:
+                row[f"tree{order}_error"] = float(np.linalg.norm(out - reference) / np.linalg.norm(reference))
+            else:
+                if sample is None:
+                    points = np.sort(np.random.default_rng(0).choice(geometry.n_points, args.sample, replace=False))
+                    sample = (points, direct_rows(tree, q, points), (3 * points[:, None] + np.arange(3)).ravel())
+                points, exact, dofs = sample
+                row[f"tree{order}_error"] = float(np.linalg.norm(out[dofs] - exact) / np.linalg.norm(exact))
+            row["levels"] = tree.far_field.tree.levels
+            del tree
+        solves = [("dense", n <= args.solve_max and matrix_gb <= args.dense_max_gb),
+                  ("matrix_free", n <= args.solve_max), ("treecode", n <= args.treecode_solve_max)]
+        for mode, wanted in solves:
+            if wanted:
                 solver = MobilitySolver(shear_rate=1.0, viscosity=1.0, device=device, operator=mode,
-                                        contact_refinement=0.0, reuse=False, density_order=1)  # as the operators above
+                                        contact_refinement=0.0, reuse=False, density_order=1,
+                                        treecode=TreecodeOptions(order=args.orders[0]))  # as the operators above
                 t = time.perf_counter()
                 sol = solver.solve(bodies)
                 row[f"solve_{mode}_s"] = time.perf_counter() - t
-                row["gmres_iterations"] = sol.iterations
+                row[f"gmres_its_{mode}"] = sol.iterations
+        row["max_rss_GB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
         rows.append(row)
-        print({k: (round(v, 4) if isinstance(v, float) else v) for k, v in row.items()}, flush=True)
+        print({k: (float(f"{v:.4g}") if isinstance(v, float) else v) for k, v in row.items()}, flush=True)
 
-    keys = ["cells", "elements", "matrix_GB", "warp_free_apply_s", "warp_free_adaptive_apply_s", "numpy_apply_s",
-            "numpy_over_warp", "max_abs_diff", "assembly_s", "dense_apply_s", "free_over_dense_apply",
-            "cores_free_apply", "cores_assembly", "solve_dense_s", "solve_matrix_free_s", "gmres_iterations"]
+    keys = ["cells", "elements", "matrix_GB", "warp_free_apply_s", "direct_product_s", "numpy_apply_s",
+            "numpy_over_warp", "max_abs_diff", "assembly_s", "dense_product_s", "free_over_dense_apply",
+            "cores_free_apply", "cores_assembly"]
+    for order in args.orders:
+        keys += [f"tree{order}_{k}" for k in ("setup_s", "product_s", "error", "GB")]
+    keys += ["levels"] + [k for mode in ("dense", "matrix_free", "treecode") for k in (f"solve_{mode}_s", f"gmres_its_{mode}")]
+    keys += ["max_rss_GB"]
     table = [{k: r.get(k, float("nan")) for k in keys} for r in rows]
     print()
     print_table(table)
     print(f"csv: {write_csv('scale.csv', table)}")
-    n = np.array([r["cells"] for r in rows], dtype=float)
-    t_free = np.array([r["warp_free_adaptive_apply_s"] for r in rows])
-    big = n >= 8
-    if big.sum() >= 2:
-        slope = np.polyfit(np.log(n[big]), np.log(t_free[big]), 1)[0]
-        print(f"matrix-free apply time grows as N^{slope:.2f} (N >= 8)")
+    exponents = {"dense product (BLAS)": growth(rows, "dense_product_s", 8),
+                 "direct matrix-free product": growth(rows, "direct_product_s", 8)}
+    for order in args.orders:
+        exponents[f"treecode product, order {order}"] = growth(rows, f"tree{order}_product_s")
+        exponents[f"treecode memory, order {order}"] = growth(rows, f"tree{order}_GB")
+    exponents["treecode solve"] = growth(rows, "solve_treecode_s")
+    for name, slope in exponents.items():
+        print(f"{name} grows as N^{slope:.2f}" + (" (N >= 8)" if "dense" in name or "direct" in name else " (N >= 64)"))
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(6.5, 4.5))
-    for key, label in (("warp_free_adaptive_apply_s", "Warp matrix-free (adaptive)"),
-                       ("warp_free_apply_s", "Warp matrix-free (plain Gauss)"),
-                       ("numpy_apply_s", "NumPy matrix-free (plain Gauss)"),
-                       ("dense_apply_s", "BLAS A @ x on the assembled matrix"),
-                       ("assembly_s", "Warp assembly (once)")):
+    fig, (ax, ax_err) = plt.subplots(1, 2, figsize=(12, 4.8))
+    curves = [("direct_product_s", "direct matrix-free (Warp)", "direct matrix-free product"),
+              ("warp_free_apply_s", "direct, plain Gauss (Warp)", None),
+              ("numpy_apply_s", "direct, plain Gauss (NumPy)", None),
+              ("dense_product_s", "BLAS A @ x, assembled", "dense product (BLAS)"),
+              ("assembly_s", "Warp assembly (once)", None)]
+    curves += [(f"tree{o}_product_s", f"treecode, order {o}", f"treecode product, order {o}") for o in args.orders]
+    curves += [(f"tree{args.orders[0]}_setup_s", f"treecode set-up, order {args.orders[0]} (once)", None)]
+    for key, label, fitted in curves:
         pts = [(r["cells"], r[key]) for r in rows if key in r]
         if pts:
-            ax.loglog(*zip(*pts), "o-", label=label)
-    ref = t_free[-1] * (n / n[-1]) ** 2
-    ax.loglog(n, ref, "k:", label="~ N^2")
+            suffix = f" ~N^{exponents[fitted]:.2f}" if fitted and np.isfinite(exponents[fitted]) else ""
+            ax.loglog(*zip(*pts), "o-", label=label + suffix)
     ax.set_xlabel("cells N (96 elements each)")
-    ax.set_ylabel("time [s]")
-    ax.set_title(f"Operator apply and assembly, {device}")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(output("scale.png"), dpi=120)
-    print(f"chart: {output('scale.png')}")
+    ax.set_ylabel("time per product [s]")
+    ax.set_title(f"Operator product, {device}")
+    for order in args.orders:
+        pts = [(r["cells"], r[f"tree{order}_error"]) for r in rows if f"tree{order}_error" in r]
+        ax_err.loglog(*zip(*pts), "o-", label=f"order {order}")
+    ax_err.axhline(1e-6, color="k", ls=":", label="1e-6")
+    ax_err.set_xlabel("cells N")
+    ax_err.set_ylabel("relative error of the product vs direct sum")
+    ax_err.set_title("Treecode error")
+    print(f"chart: {save_chart(fig, output('scale.png'), (ax, ax_err), legend_size=7)}")
 
 
 if __name__ == "__main__":

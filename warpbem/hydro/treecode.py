@@ -219,19 +219,18 @@ class FarField:
         of the box offset by (di, dj)}, for the offsets that occur (up to 40)."""
         wp = runtime.init()
         vec3 = self.kernels.green.vec3
-        dtype = self.kernels.green.dtype
         targets = wp.array(self._proxies(level, "targets"), dtype=vec3, device=self.device)
         size = self.order**3
         out = {}
         offsets = sorted({o for parity in ((0, 0), (0, 1), (1, 0), (1, 1)) for o in interaction_offsets(parity)})
         for offset in offsets:
             sources = wp.array(self._proxies(level, "sources", offset), dtype=vec3, device=self.device)
-            matrix = wp.empty((3 * size, STRENGTHS * size), dtype=dtype, device=self.device)
+            matrix = wp.empty((3 * size, STRENGTHS * size), dtype=self.kernels.green.dtype, device=self.device)
             runtime.launch_rows(self.kernels.proxy_interactions, size,
                                 lambda start, stop: [start, targets, sources, matrix], self.device, extra_dim=size)
             # kept as the kernel wrote it: a converted copy of every fresh page took 20 times as
             # long as the kernel on the CPU (fresh memory is slow to fault in on these machines)
-            out[offset] = (matrix, matrix.numpy())
+            out[offset] = (matrix, matrix.numpy() if self.device.is_cpu else matrix.numpy().copy())
         return out
 
     def _occupied_boxes(self) -> list:
@@ -249,6 +248,12 @@ class FarField:
                 grids.append(grid)
             out.append(grids)
         return out
+
+    @property
+    def memory_bytes(self) -> int:
+        """Bytes held: the interaction matrices and the interpolation weights."""
+        held = sum(a.nbytes for level in getattr(self, "interactions", {}).values() for unused, a in level.values())
+        return held + sum(seg[k].nbytes for seg in (self.sources, self.targets) for k in ("lateral", "vertical"))
 
     @property
     def group_of_target(self) -> np.ndarray:
@@ -312,7 +317,9 @@ class FarField:
         locals_ = [None] * (levels + 1)
         for level in range(2, levels + 1):
             m = 2**level
-            local = np.zeros((m, m, size * 3))
+            # in the kernels' precision: strengths rounded to single would make the product
+            # nonlinear at the 1e-8 level, and GMRES needed 26 iterations instead of 22 (float64)
+            local = np.zeros((m, m, size * 3), dtype=self.dtype)
             source_grid, target_grid = self.occupied[level]
             flat = multipoles[level].reshape(m, m, size * STRENGTHS).astype(self.dtype, copy=False)
             ii, jj = np.meshgrid(np.arange(m), np.arange(m), indexing="ij")
@@ -324,7 +331,7 @@ class FarField:
                 ok[ok] &= source_grid[si[ok], sj[ok]]
                 if ok.any():
                     local[ok] += flat[si[ok], sj[ok]] @ matrix.T
-            local = local.reshape(m, m, p, p, p * 3)
+            local = local.reshape(m, m, p, p, p * 3).astype(np.float64)
             if locals_[level - 1] is not None:  # parents to children (L2L)
                 local += self._to_children(locals_[level - 1], self.transfer["targets"][level - 1])
             locals_[level] = local

@@ -1,0 +1,162 @@
+"""The treecode (warpbem/hydro/treecode.py): its interpolation, its tree, its error against the
+direct sum, the solver with it, and the automatic choice of operator."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import warpbem as wb
+from warpbem import runtime
+from warpbem.hydro import operators
+from warpbem.hydro.geometry import SurfaceGeometry
+from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions, choose_operator
+from warpbem.hydro.treecode import TreecodeOptions, chebyshev_points, interaction_offsets, lagrange_basis
+
+
+def grid_of_spheres(side, refinement=2, fixed=False, pitch=3.0):
+    sphere = wb.mesh.sphere(1.0, refinement)
+    return [wb.Body(sphere, position=(pitch * (i % side), pitch * (i // side), 1.5), fixed=fixed)
+            for i in range(side * side)]
+
+
+@pytest.fixture(scope="module")
+def array_8x8():
+    """64 spheres of 24 elements 3 radii apart: a tree of 3 levels, so the far field passes
+    every stage (anterpolation, children to parents, interactions, parents to children)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", wb.ContactResolutionWarning)
+        geometry = SurfaceGeometry.from_bodies(grid_of_spheres(8), 2, 1.0, True)
+    poles = geometry.centres
+    direct = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="matrix_free")
+    rng = np.random.default_rng(7)
+    q, forces = rng.standard_normal(3 * geometry.n_points), rng.standard_normal(poles.shape)
+    return geometry, poles, q, forces, direct.matvec(q), direct.point_force_velocity(geometry.collocation, poles, forces)
+
+
+def test_lagrange_basis_reproduces_polynomials_of_degree_below_its_order():
+    """Lagrange interpolation on p points is exact for degree < p (Berrut & Trefethen 2004),
+    here by the barycentric formula, also at the nodes themselves."""
+    p = 6
+    u = np.concatenate([np.linspace(-1, 1, 17), chebyshev_points(p)[:2]])
+    basis = lagrange_basis(u, p)
+    nodes = chebyshev_points(p)
+    for degree in range(p):
+        np.testing.assert_allclose(basis @ nodes**degree, u**degree, atol=1e-13)
+    np.testing.assert_allclose(basis.sum(axis=1), 1.0, atol=1e-14)
+
+
+def test_interaction_lists_and_neighbours_cover_every_leaf_exactly_once():
+    """For any leaf of a 16 x 16 quadtree, its leaf neighbours plus the interaction lists of it
+    and of all its ancestors, expanded to leaves, partition the whole grid (each source leaf is
+    summed once: near directly or far at exactly one level)."""
+    levels = 4
+    n = 2**levels
+    for target in [(0, 0), (5, 9), (15, 15), (8, 7)]:
+        count = np.zeros((n, n), dtype=int)
+        ti, tj = target
+        for di in (-1, 0, 1):
+            for dj in (-1, 0, 1):
+                if 0 <= ti + di < n and 0 <= tj + dj < n:
+                    count[ti + di, tj + dj] += 1
+        for level in range(2, levels + 1):
+            shrink = 2 ** (levels - level)
+            bi, bj = ti // shrink, tj // shrink
+            for di, dj in interaction_offsets((bi % 2, bj % 2)):
+                si, sj = bi + di, bj + dj
+                if 0 <= si < 2**level and 0 <= sj < 2**level:
+                    count[si * shrink : (si + 1) * shrink, sj * shrink : (sj + 1) * shrink] += 1
+        np.testing.assert_array_equal(count, 1)
+    assert len(interaction_offsets((0, 0))) == 27
+
+
+@pytest.mark.parametrize("order, bound", [(4, 0.2 * 5.0**-4), (7, 0.2 * 5.0**-7)])
+def test_treecode_product_matches_the_direct_sum_within_its_documented_bound(array_8x8, order, bound):
+    """The double layer and the completion's point forces, by the treecode, against the direct
+    sum of the same element integrals: relative error below the bound documented in
+    TreecodeOptions (0.2 * 5^-order), and falling with the order."""
+    geometry, poles, q, forces, exact, exact_forces = array_8x8
+    tree = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="treecode",
+                               treecode=TreecodeOptions(order=order), point_sources=poles)
+    assert tree.far_field.tree.levels == 3
+    error = np.linalg.norm(tree.matvec(q) - exact) / np.linalg.norm(exact)
+    assert 1e-12 < error < bound  # a far field there is, and it is accurate
+    velocity = tree.point_sources_velocity(forces)
+    assert np.linalg.norm(velocity - exact_forces) / np.linalg.norm(exact_forces) < 3 * bound
+    both = tree.matvec(q, forces)  # one pass for both: linear, the sum of the two
+    np.testing.assert_allclose(both, tree.matvec(q) + velocity.ravel(), atol=1e-12 * np.abs(both).max())
+
+
+def test_stored_and_recomputed_near_fields_agree(array_8x8):
+    """The near field assembled once (BLAS) and recomputed in each product are the same exact
+    element integrals."""
+    geometry, poles, q, *unused = array_8x8
+    stored, recomputed = (DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="treecode",
+                                              treecode=TreecodeOptions(order=3, near_field=mode))
+                          for mode in ("stored", "recomputed"))
+    assert stored.near_field_stored and not recomputed.near_field_stored
+    np.testing.assert_allclose(stored.matvec(q), recomputed.matvec(q), rtol=0, atol=1e-12)
+
+
+def test_treecode_without_far_field_is_the_direct_sum():
+    """A scene narrower than two leaves has no far field: every element is near."""
+    geometry = SurfaceGeometry.from_bodies(grid_of_spheres(2), 2, 1.0, True)
+    q = np.random.default_rng(3).standard_normal(3 * geometry.n_points)
+    tree = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="treecode")
+    direct = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="matrix_free")
+    assert not tree.far_field.has_far_field
+    np.testing.assert_allclose(tree.matvec(q), direct.matvec(q), rtol=0, atol=1e-12)
+
+
+def test_solver_with_the_treecode_matches_the_dense_solve():
+    """A free sphere above a 6 x 6 array of fixed ones in shear: velocities and holding loads by
+    the treecode (order 6) within 1e-4 of the dense solve (the product's error, a few 1e-6,
+    grows by the system's conditioning), in about the same GMRES iterations."""
+    bodies = grid_of_spheres(6, fixed=True)
+    bodies.append(wb.Body(wb.mesh.sphere(1.0, 2), position=(7.4, 7.9, 3.2)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", wb.ContactResolutionWarning)
+        runs = {mode: wb.solve_mobility(bodies, shear_rate=1.0, operator=mode, density_order=1,
+                                        forces=np.r_[np.zeros((36, 3)), [[0, 0, -1e-13]]], contact_refinement=0.0,
+                                        treecode=TreecodeOptions(order=6))
+                for mode in ("dense", "treecode")}
+    dense, tree = runs["dense"], runs["treecode"]
+    assert tree.operator_mode == "treecode"
+    scale = np.abs(dense.velocity[-1]).max()
+    np.testing.assert_allclose(tree.velocity[-1], dense.velocity[-1], atol=1e-4 * scale)
+    np.testing.assert_allclose(tree.force[:-1], dense.force[:-1], atol=1e-4 * np.abs(dense.force[:-1]).max())
+    assert abs(tree.iterations - dense.iterations) <= 3
+
+
+def test_automatic_operator_is_decided_once_from_total_memory(monkeypatch):
+    """"auto": dense while the matrix takes at most a quarter of the device's total memory,
+    else the treecode; decided at a solver's first solve and kept for the run, whatever the
+    memory does after (a run that chose by free memory flipped to matrix-free part-way)."""
+    size = 3000
+    monkeypatch.setattr(runtime, "total_memory", lambda device: 4 * size**2 * 8)
+    assert choose_operator(size) == "dense"
+    assert choose_operator(size + 1) == "treecode"
+    assert choose_operator(2 * size, "float32") == "treecode" and choose_operator(size, "float32") == "dense"
+
+    solver = wb.MobilitySolver(shear_rate=1.0, density_order=1)
+    body = [wb.Body(wb.mesh.sphere(1.0, 2), position=(0, 0, 2.0))]
+    assert solver.solve(body).operator_mode == "dense"
+    monkeypatch.setattr(runtime, "total_memory", lambda device: 1)  # memory "gone" after the first solve
+    moved = [wb.Body(wb.mesh.sphere(1.0, 2), position=(0.5, 0, 2.0))]
+    assert solver.solve(moved).operator_mode == "dense"
+    assert wb.MobilitySolver(shear_rate=1.0, density_order=1).solve(moved).operator_mode == "treecode"
+
+
+def test_treecode_options_are_checked():
+    for bad in (dict(order=1), dict(order=2.5), dict(min_leaf_side=-1.0), dict(near_field="sometimes"),
+                dict(near_memory_fraction=2.0)):
+        with pytest.raises(ValueError):
+            TreecodeOptions(**bad)
+    with pytest.raises(ValueError, match="operator"):
+        wb.MobilitySolver(operator="fmm")
+    geometry = SurfaceGeometry.from_bodies(grid_of_spheres(1), 2, 1.0, True)
+    with pytest.raises(ValueError, match="double layer"):
+        DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="treecode", kind="single_layer")
+    with pytest.raises(ValueError, match="treecode only"):
+        DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="dense").matvec(
+            np.zeros(3 * geometry.n_points), np.zeros((7, 3)))
