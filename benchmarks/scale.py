@@ -11,9 +11,13 @@ not have; every other column is the default (adaptive) operator. The treecode's 
 of a product with a random density against the direct sum: all points up to --direct-max cells,
 beyond that --sample random points (their rows of the direct sum assembled).
 
+The treecode's one error parameter, its tolerance, is swept at --sweep-cells cells (error
+against the direct sum, time, points per box); at every N the tolerances --tolerances are run.
+
     python benchmarks/scale.py [--counts 8 16 32 64 128 256 512 1024] [--device cpu]
-                               [--orders 6 7] [--numpy-max 32] [--direct-max 128]
+                               [--tolerances 1e-4 1e-6] [--numpy-max 32] [--direct-max 128]
                                [--solve-max 32] [--treecode-solve-max 1024] [--dense-max-gb 3]
+                               [--sweep-cells 64] [--sweep 1e-2 1e-3 1e-4 1e-5 1e-6 1e-7 1e-8]
 """
 
 import resource
@@ -78,7 +82,9 @@ def main():
     warnings.simplefilter("ignore", ContactResolutionWarning)  # refinement is off on purpose
     parser = arguments(__doc__.splitlines()[0])
     parser.add_argument("--counts", type=int, nargs="+", default=[8, 16, 32, 64, 128, 256, 512, 1024])
-    parser.add_argument("--orders", type=int, nargs="+", default=[6, 7], help="treecode orders")
+    parser.add_argument("--tolerances", type=float, nargs="+", default=[1e-4, 1e-6], help="treecode tolerances")
+    parser.add_argument("--sweep-cells", type=int, default=64, help="cells of the tolerance sweep")
+    parser.add_argument("--sweep", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8])
     parser.add_argument("--numpy-max", type=int, default=32, help="largest N for the NumPy baseline")
     parser.add_argument("--direct-max", type=int, default=128, help="largest N for the direct matrix-free sum")
     parser.add_argument("--solve-max", type=int, default=32, help="largest N for dense and direct solves")
@@ -87,8 +93,9 @@ def main():
     parser.add_argument("--sample", type=int, default=400, help="points of the sampled error beyond --direct-max")
     args = parser.parse_args()
     if args.quick:
-        args.counts, args.orders = [8, 64], [6]
+        args.counts, args.tolerances, args.sweep = [8, 64], [1e-4], [1e-3, 1e-5]
     device = runtime.resolve_device(args.device)
+    sweep = tolerance_sweep(args, device)
     rows = []
     for n in args.counts:
         bodies = cells(n)
@@ -117,24 +124,25 @@ def main():
                 row["free_over_dense_apply"] = row["direct_product_s"] / row["dense_product_s"]
             del dense
         sample = None
-        for order in args.orders:
+        for tolerance in args.tolerances:
+            label = f"{tolerance:.0e}"
             t = time.perf_counter()
             tree = DoubleLayerOperator(geometry, True, QuadratureOptions(), device=device, mode="treecode",
-                                       treecode=TreecodeOptions(order=order))
+                                       treecode=TreecodeOptions(tolerance=tolerance))
             tree.matvec(q)  # the first product assembles the stored near field
-            row[f"tree{order}_setup_s"] = time.perf_counter() - t
+            row[f"tree{label}_setup_s"] = time.perf_counter() - t
             out = tree.matvec(q)
-            row[f"tree{order}_product_s"] = best_time(lambda: tree.matvec(q), 2)
-            row[f"tree{order}_GB"] = (tree.near_field_bytes * tree.near_field_stored
+            row[f"tree{label}_product_s"] = best_time(lambda: tree.matvec(q), 2)
+            row[f"tree{label}_GB"] = (tree.near_field_bytes * tree.near_field_stored
                                       + tree.far_field.memory_bytes) / 1e9
             if reference is not None:
-                row[f"tree{order}_error"] = float(np.linalg.norm(out - reference) / np.linalg.norm(reference))
+                row[f"tree{label}_error"] = float(np.linalg.norm(out - reference) / np.linalg.norm(reference))
             else:
                 if sample is None:
                     points = np.sort(np.random.default_rng(0).choice(geometry.n_points, args.sample, replace=False))
                     sample = (points, direct_rows(tree, q, points), (3 * points[:, None] + np.arange(3)).ravel())
                 points, exact, dofs = sample
-                row[f"tree{order}_error"] = float(np.linalg.norm(out[dofs] - exact) / np.linalg.norm(exact))
+                row[f"tree{label}_error"] = float(np.linalg.norm(out[dofs] - exact) / np.linalg.norm(exact))
             row["levels"] = tree.far_field.tree.levels
             del tree
         solves = [("dense", n <= args.solve_max and matrix_gb <= args.dense_max_gb),
@@ -143,7 +151,7 @@ def main():
             if wanted:
                 solver = MobilitySolver(shear_rate=1.0, viscosity=1.0, device=device, operator=mode,
                                         contact_refinement=0.0, reuse=False, density_order=1,
-                                        treecode=TreecodeOptions(order=args.orders[0]))  # as the operators above
+                                        treecode=TreecodeOptions())  # its default tolerance
                 t = time.perf_counter()
                 sol = solver.solve(bodies)
                 row[f"solve_{mode}_s"] = time.perf_counter() - t
@@ -155,8 +163,8 @@ def main():
     keys = ["cells", "elements", "matrix_GB", "warp_free_apply_s", "direct_product_s", "numpy_apply_s",
             "numpy_over_warp", "max_abs_diff", "assembly_s", "dense_product_s", "free_over_dense_apply",
             "cores_free_apply", "cores_assembly"]
-    for order in args.orders:
-        keys += [f"tree{order}_{k}" for k in ("setup_s", "product_s", "error", "GB")]
+    for tolerance in args.tolerances:
+        keys += [f"tree{tolerance:.0e}_{k}" for k in ("setup_s", "product_s", "error", "GB")]
     keys += ["levels"] + [k for mode in ("dense", "matrix_free", "treecode") for k in (f"solve_{mode}_s", f"gmres_its_{mode}")]
     keys += ["max_rss_GB"]
     table = [{k: r.get(k, float("nan")) for k in keys} for r in rows]
@@ -165,21 +173,23 @@ def main():
     print(f"csv: {write_csv('scale.csv', table)}")
     exponents = {"dense product (BLAS)": growth(rows, "dense_product_s", 8),
                  "direct matrix-free product": growth(rows, "direct_product_s", 8)}
-    for order in args.orders:
-        exponents[f"treecode product, order {order}"] = growth(rows, f"tree{order}_product_s")
-        exponents[f"treecode memory, order {order}"] = growth(rows, f"tree{order}_GB")
+    for tolerance in args.tolerances:
+        exponents[f"treecode product, tolerance {tolerance:g}"] = growth(rows, f"tree{tolerance:.0e}_product_s")
+        exponents[f"treecode memory, tolerance {tolerance:g}"] = growth(rows, f"tree{tolerance:.0e}_GB")
     exponents["treecode solve"] = growth(rows, "solve_treecode_s")
     for name, slope in exponents.items():
         print(f"{name} grows as N^{slope:.2f}" + (" (N >= 8)" if "dense" in name or "direct" in name else " (N >= 64)"))
     plt = pyplot()
-    fig, (ax, ax_err) = plt.subplots(1, 2, figsize=(12, 4.8))
+    fig, (ax, ax_err, ax_sweep) = plt.subplots(1, 3, figsize=(17, 4.8))
     curves = [("direct_product_s", "direct matrix-free (Warp)", "direct matrix-free product"),
               ("warp_free_apply_s", "direct, plain Gauss (Warp)", None),
               ("numpy_apply_s", "direct, plain Gauss (NumPy)", None),
               ("dense_product_s", "BLAS A @ x, assembled", "dense product (BLAS)"),
               ("assembly_s", "Warp assembly (once)", None)]
-    curves += [(f"tree{o}_product_s", f"treecode, order {o}", f"treecode product, order {o}") for o in args.orders]
-    curves += [(f"tree{args.orders[0]}_setup_s", f"treecode set-up, order {args.orders[0]} (once)", None)]
+    curves += [(f"tree{t:.0e}_product_s", f"treecode, tolerance {t:g}", f"treecode product, tolerance {t:g}")
+               for t in args.tolerances]
+    curves += [(f"tree{args.tolerances[-1]:.0e}_setup_s", f"treecode set-up, tolerance {args.tolerances[-1]:g} (once)",
+                None)]
     for key, label, fitted in curves:
         pts = [(r["cells"], r[key]) for r in rows if key in r]
         if pts:
@@ -188,14 +198,48 @@ def main():
     ax.set_xlabel("cells N (96 elements each)")
     ax.set_ylabel("time per product [s]")
     ax.set_title(f"Operator product, {device}")
-    for order in args.orders:
-        pts = [(r["cells"], r[f"tree{order}_error"]) for r in rows if f"tree{order}_error" in r]
-        ax_err.loglog(*zip(*pts), "o-", label=f"order {order}")
-    ax_err.axhline(1e-6, color="k", ls=":", label="1e-6")
+    for tolerance in args.tolerances:
+        key = f"tree{tolerance:.0e}_error"
+        pts = [(r["cells"], r[key]) for r in rows if key in r]
+        line, = ax_err.loglog(*zip(*pts), "o-", label=f"tolerance {tolerance:g}")
+        ax_err.axhline(tolerance, color=line.get_color(), ls=":")
     ax_err.set_xlabel("cells N")
     ax_err.set_ylabel("relative error of the product vs direct sum")
-    ax_err.set_title("Treecode error")
-    print(f"chart: {save_chart(fig, output('scale.png'), (ax, ax_err), legend_size=7)}")
+    ax_err.set_title("Treecode error (dotted: the tolerance asked for)")
+    tol = [r["tolerance"] for r in sweep]
+    ax_sweep.loglog(tol, [r["error"] for r in sweep], "o-", label="error")
+    ax_sweep.loglog(tol, tol, "k:", label="error = tolerance")
+    ax_sweep.set_xlabel("tolerance")
+    ax_sweep.set_ylabel("relative error of the product")
+    ax_sweep.invert_xaxis()
+    twin = ax_sweep.twinx()
+    twin.loglog(tol, [r["product_s"] for r in sweep], "s--", color="C3", label="time per product")
+    twin.set_ylabel("time per product [s]", color="C3")
+    ax_sweep.set_title(f"Treecode, {args.sweep_cells} cells: error and cost over the tolerance")
+    print(f"chart: {save_chart(fig, output('scale.png'), (ax, ax_err, ax_sweep), legend_size=7)}")
+
+
+def tolerance_sweep(args, device) -> list:
+    """Error against the direct sum, product and set-up time, points per box at the leaves and
+    ranks, over the treecode's tolerance, at --sweep-cells cells."""
+    bodies = cells(args.sweep_cells)
+    geometry = SurfaceGeometry.from_bodies(bodies, QuadratureOptions().order, 1.0, True)
+    q = np.random.default_rng(1).standard_normal(3 * geometry.n_elements)
+    exact = DoubleLayerOperator(geometry, True, QuadratureOptions(), device=device, mode="matrix_free").matvec(q)
+    rows = []
+    for tolerance in args.sweep:
+        t = time.perf_counter()
+        tree = DoubleLayerOperator(geometry, True, QuadratureOptions(), device=device, mode="treecode",
+                                   treecode=TreecodeOptions(tolerance=tolerance))
+        out = tree.matvec(q)
+        far = tree.far_field
+        rows.append(dict(tolerance=tolerance, error=float(np.linalg.norm(out - exact) / np.linalg.norm(exact)),
+                         setup_s=time.perf_counter() - t, product_s=best_time(lambda: tree.matvec(q), 2),
+                         leaf_points=str(far.points[-1]), largest_rank=max(max(r) for r in far.ranks.values()),
+                         far_GB=far.memory_bytes / 1e9))
+    print_table(rows)
+    print(f"csv: {write_csv('scale_tolerance.csv', rows)}")
+    return rows
 
 
 if __name__ == "__main__":

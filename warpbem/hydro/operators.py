@@ -279,7 +279,7 @@ class DoubleLayerOperator:
         """The treecode of this geometry and its near lists (``treecode.py``)."""
         geo = self.geometry
         n_qp = geo.qp_positions.shape[1]
-        far = FarField(self.kernels, self.device, geo.element_nodes[:, 8], geo.element_radius, geo.collocation,
+        far = FarField(self.kernels, self.device, geo.element_nodes[:, 8], geo.collocation,
                        np.arange(geo.n_points) // geo.points_per_element, geo.qp_positions.reshape(-1, 3),
                        np.repeat(np.arange(geo.n_elements), n_qp), self.point_sources, options)
         group = far.group_of_target

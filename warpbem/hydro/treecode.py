@@ -46,18 +46,31 @@ from .. import runtime
 
 NEAR_FIELD_MODES = ("auto", "stored", "recomputed")
 STRENGTHS = 12  # per source: 9 double-layer components (density (x) area vector), 3 of a point force
+# Points per direction: enough that the geometric decay rho^-p of the interpolation error of the
+# worst-placed pair (the Bernstein-ellipse parameter rho of the nearest far target) falls to
+# tolerance / CALIBRATION. The product's error sits well below that worst case (most of it is
+# near field; most far pairs are farther): CALIBRATION was set once on the 8 x 8 array of
+# benchmarks/scale.py; the README table ("Large arrays") reports the error over the tolerance.
+CALIBRATION = 0.1
+MAX_POINTS = 14
+# interaction matrices are truncated to the singular values above this share of the tolerance
+# (relative to the largest): the far field between well-separated boxes has low numerical rank
+# (Fong & Darve 2009, sec. 3.3), which cuts the cost of every interaction several times
+RANK_SHARE = 0.1
 
 
 @dataclass(frozen=True)
 class TreecodeOptions:
-    """order: Chebyshev points per direction in each box (error falls geometrically with it;
-    README "Large arrays"); min_leaf_side: the narrowest leaf, in scaled units (lengths / the
-    mean cell radius), at least the scene's height range in any case; near_field: "stored"
-    (the exact near-field blocks assembled once and applied with BLAS), "recomputed" (their
-    element integrals recomputed in every product, memory O(N) with a small constant), or
-    "auto": stored while they take at most ``near_memory_fraction`` of the device's memory."""
+    """tolerance: the one error parameter, the relative error of a product aimed at (the
+    Chebyshev points per direction in each box follow from it and from the box's geometry,
+    ``FarField.points_per_direction``; measured errors: README "Large arrays"); min_leaf_side:
+    the narrowest leaf, in scaled units (lengths / the mean cell radius), at least the scene's
+    height range in any case; near_field: "stored" (the exact near-field blocks assembled once
+    and applied with BLAS), "recomputed" (their element integrals recomputed in every product,
+    memory O(N) with a small constant), or "auto": stored while they take at most
+    ``near_memory_fraction`` of the device's memory."""
 
-    order: int = 6
+    tolerance: float = 1e-6
     min_leaf_side: float = 0.0
     near_field: str = "auto"
     near_memory_fraction: float = 0.25
@@ -67,14 +80,14 @@ class TreecodeOptions:
             raise ValueError(f"near_field must be one of {NEAR_FIELD_MODES}, got {self.near_field!r}")
         if not 0 <= self.near_memory_fraction <= 1:
             raise ValueError(f"near_memory_fraction must be in [0, 1], got {self.near_memory_fraction!r}")
-        if int(self.order) != self.order or not 2 <= self.order <= 12:
-            raise ValueError(f"treecode order must be an integer in [2, 12], got {self.order!r}")
+        if not np.isfinite(self.tolerance) or not 1e-12 <= self.tolerance <= 0.1:
+            raise ValueError(f"treecode tolerance must be in [1e-12, 0.1], got {self.tolerance!r}")
         if not np.isfinite(self.min_leaf_side) or self.min_leaf_side < 0:
             raise ValueError(f"min_leaf_side must be >= 0, got {self.min_leaf_side!r}")
 
 
 def chebyshev_points(p: int) -> np.ndarray:
-    """The p Chebyshev points of the first kind on [-1, 1]."""
+    """The p Chebyshev points of the first kind on [-1, 1] (symmetric: x_{p-1-a} = -x_a)."""
     return np.cos((2 * np.arange(p) + 1) * np.pi / (2 * p))
 
 
@@ -95,17 +108,19 @@ def lagrange_basis(u: np.ndarray, p: int) -> np.ndarray:
 
 class LateralTree:
     """The quadtree of boxes (module docstring): levels 0 (one box) to ``levels``, box (i, j) of
-    level l covering [x0 + i s_l, x0 + (i + 1) s_l] x [y0 + j s_l, ...], s_l = side / 2^l."""
+    level l covering [x0 + i s_l, x0 + (i + 1) s_l] x [y0 + j s_l, ...], s_l = side / 2^l.
+    margins: {"sources": ..., "targets": ...}, how far their points reach beyond their box."""
 
     def __init__(self, element_centres: np.ndarray, extra_points: np.ndarray, margins: dict,
                  z_range: tuple, min_leaf_side: float):
         lateral = np.concatenate([element_centres[:, :2], extra_points[:, :2]])
         self.origin = lateral.min(axis=0)
         extent = float((lateral.max(axis=0) - self.origin).max())
-        self.margins = margins  # {"sources": ..., "targets": ...}: lateral reach beyond a box
+        self.margins = margins
         self.z_range = (float(z_range[0]), float(z_range[1]))
         height = self.z_range[1] - self.z_range[0]
-        leaf = max(height, min_leaf_side, 1e-12)
+        # no box taller than wide, and wide enough that far boxes are apart beyond the margins
+        leaf = max(height, min_leaf_side, 3.0 * (margins["sources"] + margins["targets"]), 1e-12)
         self.side = max(extent * (1.0 + 1e-9), leaf)
         self.levels = int(np.floor(np.log2(self.side / leaf)))
 
@@ -147,6 +162,42 @@ def interaction_offsets(level_parity: tuple) -> list:
     return out
 
 
+def square_symmetries() -> list:
+    """The 8 symmetries of the square as 3x3 matrices (signed permutations of x, y; z kept)."""
+    out = []
+    for swap in (False, True):
+        for sx in (1, -1):
+            for sy in (1, -1):
+                r = np.eye(3)
+                if swap:
+                    r[[0, 1]] = r[[1, 0]]
+                out.append(np.diag([sx, sy, 1.0]) @ r)
+    return out
+
+
+def canonical_offsets() -> dict:
+    """{offset: (canonical offset c, symmetry R)} with R c = offset, 0 <= c_y <= c_x: the 40
+    interaction offsets fall into 7 classes, so 7 matrices per level, not 40."""
+    offsets = sorted({o for parity in ((0, 0), (0, 1), (1, 0), (1, 1)) for o in interaction_offsets(parity)})
+    out = {}
+    for o in offsets:
+        c = tuple(sorted((abs(o[0]), abs(o[1])), reverse=True))
+        for r in square_symmetries():
+            if np.array_equal(r[:2, :2] @ np.array(c), np.array(o)):
+                out[o] = (c, r)
+                break
+    return out
+
+
+def strength_transform(r: np.ndarray) -> np.ndarray:
+    """(12, 12) H with H s the strength s rotated by r: q (x) a -> (r q) (x) (r a) in the
+    double-layer components 3 k + i (q_i a_k), r F for the point force."""
+    h = np.zeros((STRENGTHS, STRENGTHS))
+    h[:9, :9] = np.kron(r, r)
+    h[9:, 9:] = r
+    return h
+
+
 class FarField:
     """The far field at the collocation points of sources at the quadrature points of the
     elements and at point-force poles, for one geometry (module docstring).
@@ -154,13 +205,11 @@ class FarField:
     element_of_target / element_of_source: the element each target / quadrature source belongs
     to (their box is that of its centre); poles: (P, 3) point-force positions (their own box)."""
 
-    def __init__(self, kernels, device, element_centres, element_radius, targets, element_of_target,
+    def __init__(self, kernels, device, element_centres, targets, element_of_target,
                  sources, element_of_source, poles, options: TreecodeOptions):
         self.options = options
         self.kernels = kernels
         self.device = device
-        p = options.order
-        self.order = p
         self.dtype = np.float64 if kernels.green.dtype == runtime.init().float64 else np.float32
         all_points = np.concatenate([targets, sources, poles])
         # an element's points lie in its box widened by their largest lateral offset from its centre
@@ -170,6 +219,7 @@ class FarField:
         self.tree = tree = LateralTree(element_centres, poles, margins,
                                        (all_points[:, 2].min(), all_points[:, 2].max()), options.min_leaf_side)
         n = 2**tree.levels
+        self.points = [self.points_per_direction(level) for level in range(tree.levels + 1)]
         leaf_of_element = tree.leaf_of(element_centres)
         self.leaf_of_element = leaf_of_element[:, 0] * n + leaf_of_element[:, 1]
         target_leaf = leaf_of_element[element_of_target]
@@ -181,8 +231,26 @@ class FarField:
         if self.has_far_field:
             self.transfer = {side: [self._child_interpolation(level, side) for level in range(tree.levels)]
                              for side in ("sources", "targets")}
+            self.offsets = canonical_offsets()
             self.interactions = {level: self._interaction_matrices(level) for level in range(2, tree.levels + 1)}
+            self.permutations = {level: self._proxy_permutations(level) for level in range(2, tree.levels + 1)}
             self.occupied = self._occupied_boxes()
+
+    def points_per_direction(self, level: int) -> tuple:
+        """(lateral, vertical) Chebyshev points per direction in the boxes of ``level``: the
+        fewest with rho^-p <= tolerance / CALIBRATION, rho the Bernstein-ellipse parameter of the
+        nearest far point in that direction (Trefethen 2013, Approximation Theory ch. 8). A far
+        point lies at least the gap between far boxes (less both margins) from the domain in x or
+        y; the kernel's singularity along a line through the domain is then at worst that gap off
+        the line's axis (an imaginary offset b in units of the half width: rho = b + sqrt(b^2 +
+        1)), worse than the gap along the line (rho = x + sqrt(x^2 - 1), x = 1 + b)."""
+        tree = self.tree
+        gap = tree.box_side(level) - tree.margins["sources"] - tree.margins["targets"]
+        half = np.maximum(tree.half_widths(level, "sources"), tree.half_widths(level, "targets"))
+        b = gap / np.maximum(half[[0, 2]], 1e-12)
+        rhos = b + np.sqrt(b * b + 1.0)
+        want = np.log(CALIBRATION / self.options.tolerance)
+        return tuple(int(np.clip(np.ceil(want / np.log(rho)), 2, MAX_POINTS)) for rho in rhos)
 
     def _segments(self, leaf: np.ndarray, points: np.ndarray, n: int, side: str) -> dict:
         """Points sorted by leaf, with each occupied leaf's range and interpolation weights."""
@@ -190,47 +258,74 @@ class FarField:
         order = np.argsort(flat, kind="stable")
         boxes, starts = np.unique(flat[order], return_index=True)
         stops = np.append(starts[1:], len(order))
-        p, level = self.order, self.tree.levels
+        level = self.tree.levels
+        lateral_points, vertical_points = self.points[level]
         u = self.tree.local_coordinates(level, leaf[order], points[order], side)
-        lx, ly, lz = (lagrange_basis(u[:, k], p) for k in range(3))
-        lateral = (lx[:, :, None] * ly[:, None, :]).reshape(len(order), p * p)
-        return dict(order=order, boxes=boxes, starts=starts, stops=stops, lateral=lateral, vertical=lz)
+        lx, ly = (lagrange_basis(u[:, k], lateral_points) for k in range(2))
+        lateral = (lx[:, :, None] * ly[:, None, :]).reshape(len(order), lateral_points**2)
+        return dict(order=order, boxes=boxes, starts=starts, stops=stops, lateral=lateral,
+                    vertical=lagrange_basis(u[:, 2], vertical_points))
 
-    def _child_interpolation(self, level: int, side: str) -> np.ndarray:
-        """(2, p, p) T[c, a, A]: the parent's basis A (level) at the child's point a (level + 1),
-        c the child's position in the parent along one lateral direction."""
-        nodes = chebyshev_points(self.order)
+    def _child_interpolation(self, level: int, side: str):
+        """T_lateral (2, a, A): the parent's (``level``) basis A at the child's point a, c the
+        child's position in its parent along one lateral direction; T_z (c, C) likewise in z
+        (the same interval, other points)."""
+        (pl, pz), (cl, cz) = self.points[level], self.points[level + 1]
         parent, child = self.tree.half_widths(level, side)[0], self.tree.half_widths(level + 1, side)[0]
         quarter = 0.25 * self.tree.box_side(level)
-        return np.stack([lagrange_basis((sign * quarter + nodes * child) / parent, self.order) for sign in (-1, 1)])
+        lateral = np.stack([lagrange_basis((sign * quarter + chebyshev_points(cl) * child) / parent, pl)
+                            for sign in (-1, 1)])
+        return lateral, lagrange_basis(chebyshev_points(cz), pz)
 
     def _proxies(self, level: int, side: str, shift=(0, 0)) -> np.ndarray:
-        """(p^3, 3) Chebyshev points of the domain of box ``shift`` relative to a box centred at
-        the lateral origin, index (a p + b) p + c for (x, y, z)."""
-        nodes = chebyshev_points(self.order)
+        """(p_l^2 p_z, 3) Chebyshev points of the domain of box ``shift`` relative to a box
+        centred at the lateral origin, index (a p_l + b) p_z + c for (x, y, z)."""
+        lateral_points, vertical_points = self.points[level]
         half = self.tree.half_widths(level, side)
         width = self.tree.box_side(level)
-        x, y, z = np.meshgrid(nodes * half[0] + shift[0] * width, nodes * half[1] + shift[1] * width,
-                              nodes * half[2] + 0.5 * sum(self.tree.z_range), indexing="ij")
+        x, y, z = np.meshgrid(chebyshev_points(lateral_points) * half[0] + shift[0] * width,
+                              chebyshev_points(lateral_points) * half[1] + shift[1] * width,
+                              chebyshev_points(vertical_points) * half[2] + 0.5 * sum(self.tree.z_range),
+                              indexing="ij")
         return np.column_stack([x.ravel(), y.ravel(), z.ravel()])
 
     def _interaction_matrices(self, level: int) -> dict:
-        """{(di, dj): (3 p^3, 12 p^3) velocities at a box's points per unit strength at the points
-        of the box offset by (di, dj)}, for the offsets that occur (up to 40)."""
+        """{canonical offset c: (right (12 P, r), left (3 P, r))}, the truncated factors K ~ left
+        @ right.T of the velocities K (3 P, 12 P) at a box's points per unit strength at the
+        points of the box offset by c (Warp kernel ``proxy_interactions``): left the leading
+        left singular vectors (from the eigenvectors of K K^T), right = K^T left. The other
+        offsets follow by symmetry (``_proxy_permutations``)."""
         wp = runtime.init()
         vec3 = self.kernels.green.vec3
         targets = wp.array(self._proxies(level, "targets"), dtype=vec3, device=self.device)
-        size = self.order**3
+        size = len(targets)
         out = {}
-        offsets = sorted({o for parity in ((0, 0), (0, 1), (1, 0), (1, 1)) for o in interaction_offsets(parity)})
-        for offset in offsets:
+        for offset in sorted({c for c, unused in self.offsets.values()}):
             sources = wp.array(self._proxies(level, "sources", offset), dtype=vec3, device=self.device)
             matrix = wp.empty((3 * size, STRENGTHS * size), dtype=self.kernels.green.dtype, device=self.device)
             runtime.launch_rows(self.kernels.proxy_interactions, size,
                                 lambda start, stop: [start, targets, sources, matrix], self.device, extra_dim=size)
-            # kept as the kernel wrote it: a converted copy of every fresh page took 20 times as
-            # long as the kernel on the CPU (fresh memory is slow to fault in on these machines)
-            out[offset] = (matrix, matrix.numpy() if self.device.is_cpu else matrix.numpy().copy())
+            k = matrix.numpy().astype(np.float64, copy=False)
+            values, vectors = np.linalg.eigh(k @ k.T)
+            sigma = np.sqrt(np.maximum(values[::-1], 0.0))
+            rank = max(1, int(np.count_nonzero(sigma > RANK_SHARE * self.options.tolerance * sigma[0])))
+            left = np.ascontiguousarray(vectors[:, ::-1][:, :rank])
+            out[offset] = ((k.T @ left).astype(self.dtype), left.astype(self.dtype))
+        return out
+
+    def _proxy_permutations(self, level: int) -> dict:
+        """{symmetry index: pi} with R x_t = x_pi(t) for the points x_t of a box centred at the
+        lateral origin (Chebyshev points are symmetric, so R permutes them). The kernel is
+        equivariant, K(R x, R y) = R K(x, y) H(R)^T, so the matrix of offset R c is
+        K_{Rc}[pi(t), pi(j)] = R K_c[t, j] H^T (both boxes' points permuted alike)."""
+        lateral_points, vertical_points = self.points[level]
+        a, b, c = np.meshgrid(np.arange(lateral_points), np.arange(lateral_points), np.arange(vertical_points),
+                              indexing="ij")
+        centred = np.stack([a.ravel(), b.ravel()]) - 0.5 * (lateral_points - 1)
+        out = {}
+        for k, r in enumerate(square_symmetries()):
+            moved = np.rint(r[:2, :2] @ centred + 0.5 * (lateral_points - 1)).astype(int)
+            out[k] = (moved[0] * lateral_points + moved[1]) * vertical_points + c.ravel()
         return out
 
     def _occupied_boxes(self) -> list:
@@ -250,9 +345,14 @@ class FarField:
         return out
 
     @property
+    def ranks(self) -> dict:
+        """{level: the ranks of its truncated interaction matrices}."""
+        return {level: [a.shape[1] for a, unused in m.values()] for level, m in getattr(self, "interactions", {}).items()}
+
+    @property
     def memory_bytes(self) -> int:
         """Bytes held: the interaction matrices and the interpolation weights."""
-        held = sum(a.nbytes for level in getattr(self, "interactions", {}).values() for unused, a in level.values())
+        held = sum(a.nbytes + b.nbytes for level in getattr(self, "interactions", {}).values() for a, b in level.values())
         return held + sum(seg[k].nbytes for seg in (self.sources, self.targets) for k in ("lateral", "vertical"))
 
     @property
@@ -297,71 +397,96 @@ class FarField:
         n_targets = len(self.targets["order"])
         if not self.has_far_field:
             return np.zeros((n_targets, 3))
-        p, levels = self.order, self.tree.levels
-        size = p**3
+        levels = self.tree.levels
         strengths = np.zeros((self.n_qp + self.n_poles, STRENGTHS))
         strengths[: self.n_qp, :9] = qp_strengths
         if pole_forces is not None:
             strengths[self.n_qp :, 9:] = pole_forces
         n = 2**levels
-        multipoles = [None] * (levels + 1)
-        leaf = np.zeros((n * n, p * p, p * STRENGTHS))
+        pl, pz = self.points[levels]
+        leaf = np.zeros((n * n, pl * pl, pz * STRENGTHS))
         seg = self.sources
         w = strengths[seg["order"]]
         for box, a, b in zip(seg["boxes"], seg["starts"], seg["stops"]):  # anterpolation (P2M)
-            vertical = (seg["vertical"][a:b, :, None] * w[a:b, None, :]).reshape(b - a, p * STRENGTHS)
+            vertical = (seg["vertical"][a:b, :, None] * w[a:b, None, :]).reshape(b - a, pz * STRENGTHS)
             leaf[box] = seg["lateral"][a:b].T @ vertical
-        multipoles[levels] = leaf.reshape(n, n, p, p, p * STRENGTHS)
+        multipoles = {levels: leaf.reshape(n, n, pl, pl, pz, STRENGTHS)}
         for level in range(levels - 1, 1, -1):  # children to parents (M2M)
             multipoles[level] = self._to_parent(multipoles[level + 1], self.transfer["sources"][level])
-        locals_ = [None] * (levels + 1)
+        local = None
         for level in range(2, levels + 1):
-            m = 2**level
-            # in the kernels' precision: strengths rounded to single would make the product
-            # nonlinear at the 1e-8 level, and GMRES needed 26 iterations instead of 22 (float64)
-            local = np.zeros((m, m, size * 3), dtype=self.dtype)
-            source_grid, target_grid = self.occupied[level]
-            flat = multipoles[level].reshape(m, m, size * STRENGTHS).astype(self.dtype, copy=False)
-            ii, jj = np.meshgrid(np.arange(m), np.arange(m), indexing="ij")
-            for offset, (unused, matrix) in self.interactions[level].items():  # M2L
-                di, dj = offset
-                si, sj = ii + di, jj + dj
-                ok = (si >= 0) & (si < m) & (sj >= 0) & (sj < m) & target_grid
-                ok &= (np.abs(si // 2 - ii // 2) <= 1) & (np.abs(sj // 2 - jj // 2) <= 1)
-                ok[ok] &= source_grid[si[ok], sj[ok]]
-                if ok.any():
-                    local[ok] += flat[si[ok], sj[ok]] @ matrix.T
-            local = local.reshape(m, m, p, p, p * 3).astype(np.float64)
-            if locals_[level - 1] is not None:  # parents to children (L2L)
-                local += self._to_children(locals_[level - 1], self.transfer["targets"][level - 1])
-            locals_[level] = local
-        values = locals_[levels].reshape(n * n, p * p, p * 3)
-        out = np.zeros((n_targets, 3))
+            received = self._interactions_at(level, multipoles.pop(level))
+            if local is not None:  # parents to children (L2L)
+                received += self._to_children(local, self.transfer["targets"][level - 1])
+            local = received
+        pl, pz = self.points[levels]
+        values = local.reshape(n * n, pl * pl, pz * 3)
         seg = self.targets
         sorted_out = np.zeros((n_targets, 3))
         for box, a, b in zip(seg["boxes"], seg["starts"], seg["stops"]):  # interpolation (L2P)
-            u = (seg["lateral"][a:b] @ values[box]).reshape(b - a, p, 3)
+            u = (seg["lateral"][a:b] @ values[box]).reshape(b - a, pz, 3)
             sorted_out[a:b] = np.einsum("tc,tcj->tj", seg["vertical"][a:b], u)
+        out = np.zeros((n_targets, 3))
         out[seg["order"]] = sorted_out
         return out
 
+    def _interactions_at(self, level: int, multipoles: np.ndarray) -> np.ndarray:
+        """Velocities at the points of every box of ``level`` from the boxes of its interaction
+        list (M2L): per offset R c, the factors of class c with their points permuted and their
+        components rotated (``_proxy_permutations``), two thin BLAS products."""
+        m = 2**level
+        pl, pz = self.points[level]
+        size = pl * pl * pz
+        flat = multipoles.reshape(m, m, size * STRENGTHS).astype(self.dtype, copy=False)
+        local = np.zeros((m, m, size * 3), dtype=self.dtype)
+        source_grid, target_grid = self.occupied[level]
+        ii, jj = np.meshgrid(np.arange(m), np.arange(m), indexing="ij")
+        for offset, (canonical, r) in self.offsets.items():
+            si, sj = ii + offset[0], jj + offset[1]
+            ok = (si >= 0) & (si < m) & (sj >= 0) & (sj < m) & target_grid
+            ok &= (np.abs(si // 2 - ii // 2) <= 1) & (np.abs(sj // 2 - jj // 2) <= 1)
+            ok[ok] &= source_grid[si[ok], sj[ok]]
+            if not ok.any():
+                continue
+            right, left = self.interactions[level][canonical]
+            pi = self.permutations[level][self._symmetry_index(r)]
+            rank = right.shape[1]
+            # K_{Rc}[pi(t), pi(j)] = R K_c[t, j] H^T: rotate the factors' components, permute their points
+            right_o = np.empty((size, STRENGTHS, rank), dtype=self.dtype)
+            right_o[pi] = np.einsum("ab,jbr->jar", strength_transform(r).astype(self.dtype),
+                                    right.reshape(size, STRENGTHS, rank))
+            left_o = np.empty((size, 3, rank), dtype=self.dtype)
+            left_o[pi] = np.einsum("ab,tbr->tar", r.astype(self.dtype), left.reshape(size, 3, rank))
+            local[ok] += (flat[si[ok], sj[ok]] @ right_o.reshape(-1, rank)) @ left_o.reshape(-1, rank).T
+        return local.reshape(m, m, pl, pl, pz, 3).astype(np.float64)
+
     @staticmethod
-    def _to_parent(children: np.ndarray, transfer: np.ndarray) -> np.ndarray:
-        """Parents' strengths from their children's: sum over the children c of T[c]^T x T[c]^T."""
+    def _symmetry_index(r: np.ndarray) -> int:
+        return next(i for i, s in enumerate(square_symmetries()) if np.array_equal(s, r))
+
+    @staticmethod
+    def _to_parent(children: np.ndarray, transfer) -> np.ndarray:
+        """Parents' strengths from their children's: sum over the children of the transposed
+        interpolation in x, y (child position c) and z."""
+        lateral, vertical = transfer
         n2 = children.shape[0]
         c = children.reshape(n2 // 2, 2, n2 // 2, 2, *children.shape[2:])
         out = 0.0
         for cx in (0, 1):
             for cy in (0, 1):
-                out = out + np.einsum("aA,bB,ijabz->ijABz", transfer[cx], transfer[cy], c[:, cx, :, cy], optimize=True)
+                out = out + np.einsum("aA,bB,cC,ijabcr->ijABCr", lateral[cx], lateral[cy], vertical,
+                                      c[:, cx, :, cy], optimize=True)
         return out
 
     @staticmethod
-    def _to_children(parents: np.ndarray, transfer: np.ndarray) -> np.ndarray:
+    def _to_children(parents: np.ndarray, transfer) -> np.ndarray:
         """Children's velocities at their points interpolated from their parents'."""
+        lateral, vertical = transfer
         n = parents.shape[0]
-        out = np.zeros((n, 2, n, 2, *parents.shape[2:]))
+        a, c = lateral.shape[1], vertical.shape[0]
+        out = np.zeros((n, 2, n, 2, a, a, c, parents.shape[-1]))
         for cx in (0, 1):
             for cy in (0, 1):
-                out[:, cx, :, cy] = np.einsum("aA,bB,ijABz->ijabz", transfer[cx], transfer[cy], parents, optimize=True)
-        return out.reshape(2 * n, 2 * n, *parents.shape[2:])
+                out[:, cx, :, cy] = np.einsum("aA,bB,cC,ijABCr->ijabcr", lateral[cx], lateral[cy], vertical,
+                                              parents, optimize=True)
+        return out.reshape(2 * n, 2 * n, a, a, c, parents.shape[-1])
