@@ -17,7 +17,7 @@ against the direct sum, time, points per box); at every N the tolerances --toler
     python benchmarks/scale.py [--counts 8 16 32 64 128 256 512 1024] [--device cpu]
                                [--tolerances 1e-4 1e-6] [--numpy-max 32] [--direct-max 128]
                                [--solve-max 32] [--treecode-solve-max 1024] [--dense-max-gb 3]
-                               [--sweep-cells 64] [--sweep 1e-2 1e-3 1e-4 1e-5 1e-6 1e-7 1e-8]
+                               [--sweep-cells 64] [--sweep 1e-2 1e-3 1e-4 1e-5 1e-6 1e-7]
 """
 
 import resource
@@ -84,7 +84,7 @@ def main():
     parser.add_argument("--counts", type=int, nargs="+", default=[8, 16, 32, 64, 128, 256, 512, 1024])
     parser.add_argument("--tolerances", type=float, nargs="+", default=[1e-4, 1e-6], help="treecode tolerances")
     parser.add_argument("--sweep-cells", type=int, default=64, help="cells of the tolerance sweep")
-    parser.add_argument("--sweep", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8])
+    parser.add_argument("--sweep", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7])
     parser.add_argument("--numpy-max", type=int, default=32, help="largest N for the NumPy baseline")
     parser.add_argument("--direct-max", type=int, default=128, help="largest N for the direct matrix-free sum")
     parser.add_argument("--solve-max", type=int, default=32, help="largest N for dense and direct solves")

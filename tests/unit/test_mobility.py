@@ -137,6 +137,28 @@ def test_repeated_solves_reuse_fixed_blocks_and_match_fresh_solves():
             assert sol.iterations < fresh.iterations  # warm start from the previous step
 
 
+def test_a_dense_run_updates_its_matrix_in_place():
+    """Item 6 of issue 12: a time-stepping run holds one dense matrix, not two. While the moving
+    cell keeps its element count, each new operator takes the previous one's buffer and
+    reassembles only the rows and columns of the moving cell (same result as a fresh solve);
+    when the count changes (contact refinement), it assembles a new one."""
+    fixed = [wb.Body(SPHERE, position=(0.0, 0.0, 1.3), fixed=True),
+             wb.Body(SPHERE, position=(3.0, 0.5, 1.2), fixed=True)]
+    options = dict(shear_rate=1.0, viscosity=1.0, tolerance=1e-10, operator="dense", density_order=1)
+    solver = wb.MobilitySolver(**options)
+    buffers = []
+    for x in (-3.0, -2.8):
+        bodies = [*fixed, wb.Body(SPHERE, position=(x, 1.8, 1.9))]
+        sol = solver.solve(bodies)
+        buffers.append(solver._last[0].operator.assemble().ptr)
+        fresh = wb.solve_mobility(bodies, **options)
+        np.testing.assert_allclose(sol.velocity, fresh.velocity, rtol=0, atol=1e-8)
+    assert buffers[0] == buffers[1]
+    solver.solve([*fixed, wb.Body(SPHERE, position=(0.0, 0.0, 3.5))])  # 0.2 radius above: refined
+    assert solver._last[0].geometry.n_points > 3 * len(SPHERE.elements)
+    assert solver._last[0].operator.assemble().ptr != buffers[1]
+
+
 def test_unresolved_contacts_warn_once_naming_the_bodies():
     """Closer than the mesh resolves (README stability map: errors pass 1 %), the solver warns,
     naming the bodies; a solver used for many steps warns once per contact. Unrefined meshes

@@ -92,6 +92,9 @@ def run(scene_path, output, overrides=(), device="cpu", resume=False, progress=p
             stop = scene.next_stop(state.time)
             state, frame = sim.step(state, stop)
             steps += 1
+            if steps == 1:  # decided at the first solve from the scene's size, kept for the run
+                attrs["operator"] = sim.solver.operator
+                progress(f"operator: {sim.solver.operator} (hydro/operators.py: choose_operator)")
             if scene.frame_due(state, stop):
                 writer.append(**frame.columns())
                 elapsed = time.perf_counter() - start

@@ -26,9 +26,13 @@ The two parts of the elastic double layer (``"elastic_rotation"``, ``"elastic_dy
 ``warpbem/elastic/interior.py``) take their self blocks from their own rigid-translation
 identity, as the double layer does.
 
-Applied either as an assembled dense matrix (Warp assembly, NumPy BLAS on CPU, a Warp kernel on
-CUDA) or matrix-free (Warp recomputes the element integrals in every product); ``mode="auto"``
-assembles while the matrix takes at most half the device's free memory.
+Applied as an assembled dense matrix (Warp assembly, NumPy BLAS on CPU, a Warp kernel on
+CUDA), matrix-free (the direct sum: Warp recomputes the element integrals in every product), or
+by the treecode (``treecode.py``: the near field exactly, stored or recomputed, the far field of
+the double layer and of point forces at ``point_sources`` by interpolation, O(N)).
+``mode="auto"`` here assembles while the matrix takes at most half the device's free memory,
+else the treecode (the double layer) or matrix-free (other kinds); a time-stepping run decides
+once, from the total memory (``choose_operator``, used by ``MobilitySolver``).
 """
 
 from __future__ import annotations
@@ -150,13 +154,23 @@ class DoubleLayerOperator:
         if self._matrix is not None:
             return self._matrix
         wp = self._wp
-        # every entry is written below (gathered, assembled or a self block): no zero fill, which
-        # on the CPU cost as much as the assembly itself for 1632 elements (192 MB)
-        matrix = wp.empty((self.size, self.size), dtype=self.kernels.green.dtype, device=self.device)
         kept = np.flatnonzero(self.reused_bodies)
         moved = np.flatnonzero(~self.reused_bodies)
         kept_rows = self.geometry.points_of(kept)
         moved_rows = self.geometry.points_of(moved)
+        previous = self._previous
+        # the kept bodies where they were (the moving ones kept their element counts): update the
+        # previous matrix in place, which hands its buffer over, so a run holds one matrix, not two
+        in_place = (previous is not None and previous._matrix is not None
+                    and previous.geometry.n_points == self.geometry.n_points
+                    and np.array_equal(previous.geometry.body_ranges[kept], self.geometry.body_ranges[kept]))
+        if in_place:
+            matrix, previous._matrix = previous._matrix, None  # it would assemble afresh if asked again
+            kept_rows = []  # their blocks are where they belong
+        else:
+            # every entry is written below (gathered, assembled or a self block): no zero fill,
+            # which on the CPU cost as much as the assembly itself for 1632 elements (192 MB)
+            matrix = wp.empty((self.size, self.size), dtype=self.kernels.green.dtype, device=self.device)
 
         def indices(a):
             return wp.array(np.ascontiguousarray(a, dtype=np.int32), dtype=int, device=self.device)
@@ -169,6 +183,7 @@ class DoubleLayerOperator:
                                 lambda start, stop: [start, old, src, src, matrix, dst, dst],
                                 self.device, extra_dim=len(kept_rows))
         # rows: collocation points; columns: elements, each filling the columns of its points
+        kept_rows = self.geometry.points_of(kept)
         for rows, cols in ((moved_rows, np.arange(self.geometry.n_elements)), (kept_rows, self.geometry.elements_of(moved))):
             if len(rows) and len(cols):
                 r, c = indices(rows), indices(cols)

@@ -13,27 +13,35 @@ barycentric Lagrange treecode (Wang, Krasny & Tlupova 2020, Commun. Comput. Phys
 needs nothing of the kernel but its values, so the Blake (1971) wall images come for free:
 
 * boxes: a uniform quadtree in the wall's plane (x, y), every box spanning the whole height
-  range of the scene, so its domain is [box +- margin] x [z_lo, z_hi], with the margin the
-  largest element radius (an element belongs to the box of its centre, its points lie within
-  the margin). Leaves are no narrower than the height range, so no box is taller than wide;
-* in each box, p x p x p Chebyshev points (first kind; p, ``TreecodeOptions.order``, is the one
-  error parameter), the far field of its sources represented by strengths at them
-  (anterpolation: Q_m = sum_s L_m(y_s) Q_s with L_m the tensor Lagrange basis), and the far
-  field felt in the box by the velocities at them (interpolated to the targets by L_m(x));
+  range of the scene, so its domain is [box +- margin] x [z_lo, z_hi], the margin the largest
+  lateral offset of an element's points from its centre (an element belongs to the box of its
+  centre). Leaves are no narrower than the height range, so no box is taller than wide;
+* in each box, Chebyshev points (first kind) in x, y and z, the far field of its sources
+  represented by strengths at them (anterpolation: Q_m = sum_s L_m(y_s) Q_s with L_m the
+  tensor Lagrange basis), and the far field felt in the box by the velocities at them
+  (interpolated to the targets by L_m(x)); children pass strengths to parents and parents
+  velocities to children by the same interpolation;
+* one error parameter, the ``tolerance``: the number of points per direction and level is the
+  fewest for which the worst-placed far point's interpolation error, rho^-p with rho its
+  Bernstein-ellipse parameter (``FarField.points_per_direction``), is within the tolerance
+  (times CALIBRATION), so flat, narrow or wide boxes get what they need, and upper levels fewer;
 * the kernel is translation invariant along the wall (it depends on x1 - y1, x2 - y2, x3, y3)
-  and every box of a level has the same Chebyshev points up to a lateral shift, so the
-  interactions between a box's points and those of a box of its interaction list (the
-  children of its parent's neighbours that are not its own neighbours: at most 40 offsets per
-  level) are 40 matrices per level, computed once by a Warp kernel and applied with BLAS;
+  and every box of a level has the same points up to a lateral shift, so the interactions
+  between a box's points and those of a box of its interaction list (the children of its
+  parent's neighbours that are not its own neighbours: 40 offsets per level) are matrices per
+  offset, computed once by a Warp kernel; by the symmetries of the square 7 of them give all 40
+  (points permuted, components rotated), and each is kept as its truncated singular value
+  factors (the far field between separated boxes has low numerical rank: Fong & Darve 2009,
+  sec. 3.3), applied with BLAS;
 * the near field, a leaf's own and its 8 neighbours' elements, is left to the exact element
   integrals (adaptive, self terms: ``DoubleLayerOperator``), the points of a leaf sharing one
   list of near elements.
 
-Interpolation with p points per direction converges geometrically in p for kernels analytic
-away from the sources (Fong & Darve 2009, eq. 7-9); the error measured against the direct sum
-is tabulated in the README ("Large arrays") and checked in ``tests/unit/test_treecode.py``.
-Poles below the boxes' interpolation in z do not exist: the wall images x* lie below z = 0,
-at least as far from a source box as x itself (|y - x*| >= |y - x| for y3, x3 > 0).
+The error of a product against the direct sum is tabulated over the tolerance in the README
+("Large arrays") and checked in ``tests/unit/test_treecode.py``: at or below the tolerance for
+the double layer; the point forces alone, whose far field is a larger share of their whole,
+up to a few times it. Singularities below the boxes do not occur: the wall images x* lie below
+z = 0, at least as far from a source box as x itself (|y - x*| >= |y - x| for y3, x3 > 0).
 """
 
 from __future__ import annotations
