@@ -197,3 +197,17 @@ def test_interaction_matrices_follow_from_their_symmetry_class():
             "ab,tbjc,dc->tajd", r, k_c, strength_transform(r))
         np.testing.assert_allclose(direct(offset).reshape(k_c.shape), expected, atol=1e-13 * np.abs(k_c).max())
     assert len({c for c, unused in tree.offsets.values()}) == 7 and len(tree.offsets) == 40
+
+
+def test_preconditioner_blocks_cut_from_the_stored_near_field_equal_the_assembled_ones(array_8x8):
+    """Each body's own block, cut from the treecode's stored near field, is the block of the
+    dense operator (the same element integrals and self blocks)."""
+    geometry, *unused = array_8x8
+    tree = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="treecode",
+                               treecode=TreecodeOptions(tolerance=1e-3, near_field="stored"))
+    dense = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="dense")
+    bodies = [0, 9, 63]
+    assert all(tree._block_from_near_field(p) is not None for p in bodies)
+    cut, assembled = tree.diagonal_blocks(bodies), dense.diagonal_blocks(bodies)
+    for p in bodies:
+        np.testing.assert_allclose(cut[p], assembled[p], rtol=0, atol=1e-13)

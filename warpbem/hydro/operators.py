@@ -224,9 +224,43 @@ class DoubleLayerOperator:
             host = self.assemble().numpy()
             return {p: np.array(host[3 * ranges[p][0] : 3 * ranges[p][1], 3 * ranges[p][0] : 3 * ranges[p][1]],
                                 dtype=np.float64) for p in bodies}
-        return {p: DoubleLayerOperator(self.geometry.body(p), self.wall, self.quadrature, self.dtype_name, self.device,
-                                       "dense", kind=self.kind).assemble().numpy().astype(np.float64)
+        blocks = {p: self._block_from_near_field(p) for p in bodies} if self.mode == "treecode" else {}
+        return {p: blocks.get(p) if blocks.get(p) is not None else
+                DoubleLayerOperator(self.geometry.body(p), self.wall, self.quadrature, self.dtype_name, self.device,
+                                    "dense", kind=self.kind).assemble().numpy().astype(np.float64)
                 for p in bodies}
+
+    def _block_from_near_field(self, body: int):
+        """Body p's block cut from the treecode's stored near field (its self blocks added), or
+        None where it is not stored or lacks some of p's elements (a body wider than a leaf):
+        assembling 1024 bodies alone took longer than their near field."""
+        if not self.near_field_stored:
+            return None
+        geo, seg = self.geometry, self.far_field.targets
+        m = geo.points_per_element
+        starts, elements = self._near_elements
+        own = np.arange(*geo.element_ranges[body])
+        a0, a1 = geo.body_ranges[body]
+        groups = self._point_group[a0:a1]
+        if not hasattr(self, "_point_position"):  # of each point among its leaf's points
+            self._point_position = np.empty(geo.n_points, dtype=int)
+            self._point_position[seg["order"]] = (np.arange(len(seg["order"]))
+                                                  - np.repeat(seg["starts"], seg["stops"] - seg["starts"]))
+        position = self._point_position
+        out = np.empty((3 * (a1 - a0), 3 * (a1 - a0)))
+        blocks = self.near_blocks()
+        for g in np.unique(groups):
+            cols = elements[starts[g] : starts[g + 1]]
+            at = np.minimum(np.searchsorted(cols, own), len(cols) - 1)
+            if not np.array_equal(cols[at], own):
+                return None
+            points = np.flatnonzero(groups == g) + a0
+            columns = (m * at[:, None] + np.arange(m)).ravel()
+            out[dof_indices(points - a0)] = blocks[g][3][np.ix_(dof_indices(position[points]), dof_indices(columns))]
+        n = a1 - a0
+        i, k = np.arange(n)[:, None, None], np.arange(3)
+        out[3 * i + k[None, :, None], 3 * i + k[None, None, :]] = self._self_blocks().numpy()[a0:a1]
+        return out
 
     def _self_blocks(self):
         """Diagonal blocks: for the double layer and its adjoint -(sum over the other elements
@@ -297,7 +331,7 @@ class DoubleLayerOperator:
         far = FarField(self.kernels, self.device, geo.element_nodes[:, 8], geo.collocation,
                        np.arange(geo.n_points) // geo.points_per_element, geo.qp_positions.reshape(-1, 3),
                        np.repeat(np.arange(geo.n_elements), n_qp), self.point_sources, options)
-        group = far.group_of_target
+        group = self._point_group = far.group_of_target
         self._near_elements = far.near_lists(far.leaf_of_element)
         self._device_lists("near_elements", group, *self._near_elements)
         self._device_lists("near_poles", group, *far.near_lists(far.leaf_of_pole))
