@@ -242,7 +242,7 @@ class DoubleLayerOperator:
         own = np.arange(*geo.element_ranges[body])
         a0, a1 = geo.body_ranges[body]
         groups = self._point_group[a0:a1]
-        if not hasattr(self, "_point_position"):  # of each point among its leaf's points
+        if self._point_position is None:  # of each point among its leaf's points
             self._point_position = np.empty(geo.n_points, dtype=int)
             self._point_position[seg["order"]] = (np.arange(len(seg["order"]))
                                                   - np.repeat(seg["starts"], seg["stops"] - seg["starts"]))
@@ -332,6 +332,7 @@ class DoubleLayerOperator:
                        np.arange(geo.n_points) // geo.points_per_element, geo.qp_positions.reshape(-1, 3),
                        np.repeat(np.arange(geo.n_elements), n_qp), self.point_sources, options)
         group = self._point_group = far.group_of_target
+        self._point_position = None
         self._near_elements = far.near_lists(far.leaf_of_element)
         self._device_lists("near_elements", group, *self._near_elements)
         self._device_lists("near_poles", group, *far.near_lists(far.leaf_of_pole))
