@@ -342,9 +342,12 @@ class CompletedDoubleLayer:
                         scipy.linalg.lu_factor(self.body_block(p, blocks[p]), check_finite=False) if p in blocks else None
                         for p in range(len(self.ranges))]
 
+        ranges, factors = self.ranges, self.factors  # not self: a cycle through the closure kept
+        # whole systems (dense matrices) alive until the cyclic collector ran, 3 GB per step
+
         def apply(r):
             out = r.copy()
-            for rows, factor in zip(self.ranges, self.factors):
+            for rows, factor in zip(ranges, factors):
                 if factor is not None:
                     out[rows] = scipy.linalg.lu_solve(factor, r[rows], check_finite=False)
             return out

@@ -83,6 +83,7 @@ IDENTITY_KINDS = ("double_layer", "elastic_rotation", "elastic_dyadic")
 
 
 DENSE_MEMORY_SHARE = 0.25  # "auto": dense while one matrix takes at most this share of the memory
+DENSE_HEADROOM = 0.03  # a dense matrix's buffer (CPU) has room for this share more unknowns
 
 
 def choose_operator(size: int, dtype: str = "float64", device="cpu") -> str:
@@ -136,6 +137,7 @@ class DoubleLayerOperator:
         self._lists = {}
         self.far_field = self._far_field(treecode or TreecodeOptions()) if mode == "treecode" else None
         self._matrix = None
+        self._buffer = None  # the memory behind _matrix (it may be larger: DENSE_HEADROOM)
         self._diagonal = None
         self.reused_bodies = self._bodies_unchanged_since(reuse)
         self._previous = reuse if self.reused_bodies.any() else None
@@ -159,18 +161,25 @@ class DoubleLayerOperator:
         kept_rows = self.geometry.points_of(kept)
         moved_rows = self.geometry.points_of(moved)
         previous = self._previous
-        # the kept bodies where they were (the moving ones kept their element counts): update the
-        # previous matrix in place, which hands its buffer over, so a run holds one matrix, not two
-        in_place = (previous is not None and previous._matrix is not None
-                    and previous.geometry.n_points == self.geometry.n_points
+        # update the previous matrix in place, its buffer handed over, so a run holds one matrix,
+        # not two: as it is where the kept bodies kept their places, or with their block moved
+        # where the moving ones changed their element counts (contact refinement)
+        matrix = None
+        if previous is not None and previous._matrix is not None:
+            same = (previous.geometry.n_points == self.geometry.n_points
                     and np.array_equal(previous.geometry.body_ranges[kept], self.geometry.body_ranges[kept]))
-        if in_place:
-            matrix, previous._matrix = previous._matrix, None  # it would assemble afresh if asked again
-            kept_rows = []  # their blocks are where they belong
-        else:
+            matrix = previous._matrix if same else self._moved_kept_block(previous, kept)
+            if matrix is not None:
+                self._buffer = previous._buffer
+                previous._matrix = previous._buffer = None  # it would assemble afresh if asked again
+                kept_rows = []  # their blocks are where they belong
+        if matrix is None:
             # every entry is written below (gathered, assembled or a self block): no zero fill,
-            # which on the CPU cost as much as the assembly itself for 1632 elements (192 MB)
-            matrix = wp.empty((self.size, self.size), dtype=self.kernels.green.dtype, device=self.device)
+            # which on the CPU cost as much as the assembly itself for 1632 elements (192 MB);
+            # on the CPU room for a few per cent more unknowns, for the moves above
+            capacity = int((self.size * (1.0 + DENSE_HEADROOM)) ** 2) if self.device.is_cpu else self.size**2
+            self._buffer = wp.empty(capacity, dtype=self.kernels.green.dtype, device=self.device)
+            matrix = self._buffer[: self.size**2].reshape((self.size, self.size))
 
         def indices(a):
             return wp.array(np.ascontiguousarray(a, dtype=np.int32), dtype=int, device=self.device)
@@ -182,6 +191,8 @@ class DoubleLayerOperator:
             runtime.launch_rows(self.kernels.gather_entries, len(kept_rows),
                                 lambda start, stop: [start, old, src, src, matrix, dst, dst],
                                 self.device, extra_dim=len(kept_rows))
+            del old
+            self._previous._matrix = self._previous._buffer = None  # superseded: free it now
         # rows: collocation points; columns: elements, each filling the columns of its points
         kept_rows = self.geometry.points_of(kept)
         for rows, cols in ((moved_rows, np.arange(self.geometry.n_elements)), (kept_rows, self.geometry.elements_of(moved))):
@@ -207,10 +218,32 @@ class DoubleLayerOperator:
             a, k = np.arange(n)[:, None, None], np.arange(3)
             block[3 * a + k[None, :, None], 3 * a + k[None, None, :]] = -row_sums
         if not self.device.is_cpu:
-            matrix = wp.array(host, dtype=self.kernels.green.dtype, device=self.device)
+            self._buffer = wp.array(host.ravel(), dtype=self.kernels.green.dtype, device=self.device)
+            matrix = self._buffer.reshape((self.size, self.size))
         self._matrix = matrix
         self._previous = None  # the old matrix may now be freed
         return matrix
+
+    def _moved_kept_block(self, previous, kept):
+        """The previous matrix's buffer with its kept block (the bodies that did not change)
+        moved to where this layout puts it, or None where that cannot be done in place: on a
+        GPU, kept bodies not contiguous, no room, or the block moving one way while the matrix
+        grows the other. Each entry moves at most as far as the block's shift, all the same way,
+        so rows copied in that order never overwrite one not yet read."""
+        if not self.device.is_cpu or len(kept) == 0 or not np.array_equal(kept, np.arange(kept[0], kept[-1] + 1)):
+            return None
+        old, new = previous.geometry.body_ranges[kept], self.geometry.body_ranges[kept]
+        shift = 3 * int(new[0, 0] - old[0, 0])
+        before, size = previous.size, self.size
+        if size**2 > previous._buffer.shape[0] or (shift > 0 and size < before) or (shift < 0 and size > before):
+            return None
+        first, last = 3 * int(old[0, 0]), 3 * int(old[-1, 1])
+        flat = previous._buffer.numpy()
+        rows = range(first, last) if size <= before and shift <= 0 else range(last - 1, first - 1, -1)
+        for r in rows:  # NumPy copies through a buffer where a row overlaps itself
+            start = (r + shift) * size + first + shift
+            flat[start : start + last - first] = flat[r * before + first : r * before + last]
+        return previous._buffer[: size**2].reshape((size, size))
 
     def diagonal_blocks(self, bodies) -> dict:
         """{p: the (3 E_p, 3 E_p) host float64 block of 1/2 + D for body p's own elements}: cut
