@@ -1,7 +1,9 @@
 """The CDL mobility solver: reciprocity between bodies, free/fixed consistency, apply modes,
 precision, warm starts, and CUDA compilation of every kernel."""
 
+import gc
 import tempfile
+import weakref
 
 import numpy as np
 import pytest
@@ -165,6 +167,14 @@ def test_a_dense_run_updates_its_matrix_in_place():
         np.testing.assert_allclose(sol.velocity, wb.solve_mobility(bodies, **options).velocity, rtol=0, atol=1e-8)
     sizes = solver._last[0].geometry.body_ranges[0]
     assert sizes[1] - sizes[0] == len(SPHERE.elements) and pointers[0] == pointers[1]
+    # and a superseded system is gone at once, not when the cyclic collector gets to it
+    gc.disable()
+    try:
+        last = weakref.ref(solver._last[0])
+        solver.solve([wb.Body(SPHERE, position=(0.3, 0.0, 5.5)), *fixed])
+        assert last() is None
+    finally:
+        gc.enable()
 
 
 def test_unresolved_contacts_warn_once_naming_the_bodies():
