@@ -10,6 +10,7 @@ from .elastic.deformable import DeformationError, DeformationWarning
 from .hydro.linalg import ConvergenceError
 from .hydro.mobility import ContactResolutionWarning, MobilitySolution, MobilitySolver, solve_mobility
 from .hydro.traction import TractionSolution, solve_traction
+from .hydro.treecode import TreecodeOptions
 from .surfaces import mesh
 from .surfaces.body import Body
 from .surfaces.mesh import MeshError
@@ -17,5 +18,5 @@ from .surfaces.placement import PlacementError
 
 __version__ = "0.1.0"
 __all__ = ["mesh", "units", "Body", "solve_mobility", "MobilitySolver", "MobilitySolution", "solve_traction",
-           "TractionSolution", "ConvergenceError", "DeformationError", "DeformationWarning",
+           "TractionSolution", "TreecodeOptions", "ConvergenceError", "DeformationError", "DeformationWarning",
            "MeshError", "PlacementError", "ContactResolutionWarning", "__version__"]

@@ -150,12 +150,12 @@ def test_automatic_operator_is_decided_once_from_total_memory(monkeypatch):
 
 
 def test_treecode_options_are_checked():
-    for bad in (dict(tolerance=0.0), dict(tolerance=0.5), dict(tolerance=float("nan")), dict(min_leaf_side=-1.0),
+    for bad in (dict(tolerance=0.0), dict(tolerance=0.5), dict(tolerance=float("nan")),
                 dict(near_field="sometimes"),
                 dict(near_memory_fraction=2.0)):
         with pytest.raises(ValueError):
             TreecodeOptions(**bad)
-    with pytest.raises(ValueError, match="operator"):
+    with pytest.raises(ValueError, match="operator mode"):
         wb.MobilitySolver(operator="fmm")
     geometry = SurfaceGeometry.from_bodies(grid_of_spheres(1), 2, 1.0, True)
     with pytest.raises(ValueError, match="double layer"):

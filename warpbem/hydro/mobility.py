@@ -393,7 +393,7 @@ class MobilitySolver:
         self.max_iterations = max_iterations
         self.dtype = dtype
         if operator not in OPERATOR_MODES:
-            raise ValueError(f"operator must be one of {OPERATOR_MODES}, got {operator!r}")
+            raise ValueError(f"operator mode must be one of {OPERATOR_MODES}, got {operator!r}")
         self.operator = operator  # "auto" is decided at the first solve, for the whole run
         self.treecode = treecode or TreecodeOptions()
         if density_order not in DENSITY_ORDERS:

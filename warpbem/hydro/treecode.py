@@ -71,15 +71,12 @@ RANK_SHARE = 0.1
 class TreecodeOptions:
     """tolerance: the one error parameter, the relative error of a product aimed at (the
     Chebyshev points per direction in each box follow from it and from the box's geometry,
-    ``FarField.points_per_direction``; measured errors: README "Large arrays"); min_leaf_side:
-    the narrowest leaf, in scaled units (lengths / the mean cell radius), at least the scene's
-    height range in any case; near_field: "stored" (the exact near-field blocks assembled once
+    ``FarField.points_per_direction``; measured errors: README "Large arrays"); near_field: "stored" (the exact near-field blocks assembled once
     and applied with BLAS), "recomputed" (their element integrals recomputed in every product,
     memory O(N) with a small constant), or "auto": stored while they take at most
     ``near_memory_fraction`` of the device's memory."""
 
     tolerance: float = 1e-6
-    min_leaf_side: float = 0.0
     near_field: str = "auto"
     near_memory_fraction: float = 0.25
 
@@ -90,8 +87,6 @@ class TreecodeOptions:
             raise ValueError(f"near_memory_fraction must be in [0, 1], got {self.near_memory_fraction!r}")
         if not np.isfinite(self.tolerance) or not 1e-12 <= self.tolerance <= 0.1:
             raise ValueError(f"treecode tolerance must be in [1e-12, 0.1], got {self.tolerance!r}")
-        if not np.isfinite(self.min_leaf_side) or self.min_leaf_side < 0:
-            raise ValueError(f"min_leaf_side must be >= 0, got {self.min_leaf_side!r}")
 
 
 def chebyshev_points(p: int) -> np.ndarray:
@@ -120,7 +115,7 @@ class LateralTree:
     margins: {"sources": ..., "targets": ...}, how far their points reach beyond their box."""
 
     def __init__(self, element_centres: np.ndarray, extra_points: np.ndarray, margins: dict,
-                 z_range: tuple, min_leaf_side: float):
+                 z_range: tuple):
         lateral = np.concatenate([element_centres[:, :2], extra_points[:, :2]])
         self.origin = lateral.min(axis=0)
         extent = float((lateral.max(axis=0) - self.origin).max())
@@ -128,7 +123,7 @@ class LateralTree:
         self.z_range = (float(z_range[0]), float(z_range[1]))
         height = self.z_range[1] - self.z_range[0]
         # no box taller than wide, and wide enough that far boxes are apart beyond the margins
-        leaf = max(height, min_leaf_side, 3.0 * (margins["sources"] + margins["targets"]), 1e-12)
+        leaf = max(height, 3.0 * (margins["sources"] + margins["targets"]), 1e-12)
         self.side = max(extent * (1.0 + 1e-9), leaf)
         self.levels = int(np.floor(np.log2(self.side / leaf)))
 
@@ -224,8 +219,7 @@ class FarField:
         margins = {side: float(np.linalg.norm(points[:, :2] - element_centres[owner, :2], axis=1).max(initial=0.0))
                    for side, points, owner in (("sources", sources, element_of_source),
                                                ("targets", targets, element_of_target))}
-        self.tree = tree = LateralTree(element_centres, poles, margins,
-                                       (all_points[:, 2].min(), all_points[:, 2].max()), options.min_leaf_side)
+        self.tree = tree = LateralTree(element_centres, poles, margins, (all_points[:, 2].min(), all_points[:, 2].max()))
         n = 2**tree.levels
         self.points = [self.points_per_direction(level) for level in range(tree.levels + 1)]
         leaf_of_element = tree.leaf_of(element_centres)
