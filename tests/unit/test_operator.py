@@ -109,7 +109,9 @@ def test_auto_mode_assembles_only_what_fits():
     auto = DoubleLayerOperator(geometry, True, QuadratureOptions())
     assert auto.mode == "dense"  # 0.84 MB here
     tight = DoubleLayerOperator(geometry, True, QuadratureOptions(), dense_memory_limit=1e5)
-    assert tight.mode == "matrix_free"
+    assert tight.mode == "treecode"  # the double layer; other kernels go matrix-free
+    assert DoubleLayerOperator(geometry, True, QuadratureOptions(), dense_memory_limit=1e5,
+                               kind="single_layer").mode == "matrix_free"
     assert runtime.free_memory(runtime.resolve_device("cpu")) > 1e8
 
 
