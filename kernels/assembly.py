@@ -455,6 +455,33 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
         out[it, ip] = g.stokeslet(targets[row_offset + it], vec3(), poles[ip])
 
     @wp.kernel(enable_backward=False, module="unique")
+    def identity_self_blocks(row_offset: int, surf: Surface, points: wp.array(dtype=int),
+                             matrix: wp.array2d(dtype=dtype)):
+        """The diagonal 3x3 block of each listed point from the identity, on the device: minus the
+        sum of the blocks in its rows over the other points of its body (the host does this with
+        BLAS on the CPU). A thread reads only its own rows and writes only its own block."""
+        a = points[row_offset + wp.tid()]
+        first = surf.body_start[a] * m
+        last = surf.body_end[a] * m
+        for j in range(3):
+            sums = vec3()
+            for b in range(first, last):
+                if b != a:
+                    for i in range(3):
+                        sums[i] += matrix[3 * a + j, 3 * b + i]
+            for i in range(3):
+                matrix[3 * a + j, 3 * a + i] = -sums[i]
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def write_self_blocks(row_offset: int, points: wp.array(dtype=int), blocks: wp.array(dtype=mat33),
+                          matrix: wp.array2d(dtype=dtype)):
+        """matrix's diagonal 3x3 block of each listed point = its given block (single layers)."""
+        a = points[row_offset + wp.tid()]
+        for j in range(3):
+            for i in range(3):
+                matrix[3 * a + j, 3 * a + i] = blocks[a][j, i]
+
+    @wp.kernel(enable_backward=False, module="unique")
     def dense_matvec(matrix: wp.array2d(dtype=dtype), x: wp.array(dtype=dtype), out: wp.array(dtype=dtype)):
         """out = matrix @ x, one row per thread (used on CUDA; NumPy BLAS is faster on CPU)."""
         row = wp.tid()
@@ -467,6 +494,8 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
         green=g,
         Surface=Surface,
         dense_matvec=dense_matvec,
+        identity_self_blocks=identity_self_blocks,
+        write_self_blocks=write_self_blocks,
         assemble_entries=assemble_entries,
         gather_entries=gather_entries,
         apply_matrix_free=apply_matrix_free,

@@ -128,3 +128,21 @@ def test_single_layers_of_a_uniform_density_on_a_sphere(mode, kind, exact, devic
     density = np.tile([0.3, -0.2, 1.0], geometry.n_elements)
     u = op.matvec(density).reshape(-1, 3)
     assert np.abs(u - exact * density[:3]).max() < 1e-3 * exact
+
+
+@pytest.mark.parametrize("kind, density_order", [("double_layer", 1), ("double_layer", 2), ("single_layer", 1)])
+def test_self_blocks_written_on_the_device_equal_the_host_ones(kind, density_order):
+    """The Warp kernels that write the self blocks where the matrix lives (CUDA: no round trip
+    through the host), run here on the CPU, give the host's BLAS row sums (or Duffy blocks)."""
+    geometry = SurfaceGeometry.from_bodies(two_spheres_near_wall(), 2, 1.0, True, density_order=density_order)
+    host = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="dense", kind=kind)
+    device = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="dense", kind=kind)
+    expected = host.assemble().numpy()
+    matrix = device.assemble()
+    values = matrix.numpy()
+    a, k = np.arange(geometry.n_points)[:, None, None], np.arange(3)
+    diagonal = (3 * a + k[None, :, None], 3 * a + k[None, None, :])
+    values[diagonal] = 0.0
+    device._device_self_blocks(matrix, range(len(geometry.body_ranges)))
+    assert np.abs(expected[diagonal]).max() > 0.1
+    np.testing.assert_allclose(values, expected, rtol=0, atol=1e-13 * np.abs(expected).max())

@@ -201,13 +201,23 @@ class DoubleLayerOperator:
                 runtime.launch_rows(self.kernels.assemble_entries, len(rows),
                                     lambda start, stop: [start, self.surface, r, c, 0, matrix],
                                     self.device, extra_dim=len(cols))
-        host = matrix.numpy() if self.device.is_cpu else matrix.numpy().copy()
-        if self.kind not in IDENTITY_KINDS:  # self blocks: the double layer's rows sums, or Duffy's
+        if self.device.is_cpu:
+            self._host_self_blocks(matrix.numpy(), moved)
+        else:  # on the device: the matrix never goes through the host
+            self._device_self_blocks(matrix, moved)
+        self._matrix = matrix
+        self._previous = None  # the old matrix may now be freed
+        return matrix
+
+    def _host_self_blocks(self, host: np.ndarray, moved) -> None:
+        """The moved bodies' self blocks written into the host matrix (a view of it on the CPU):
+        from the identity by a BLAS product, or the single layers' Duffy blocks."""
+        if self.kind not in IDENTITY_KINDS:
             a = self.geometry.points_of(moved)[:, None, None]
             k = np.arange(3)
             host[3 * a + k[None, :, None], 3 * a + k[None, None, :]] = self._self_blocks().numpy()[a[:, 0, 0]]
-            moved = []
-        for p in moved:  # self blocks from the identity; kept bodies brought theirs along
+            return
+        for p in moved:  # kept bodies brought theirs along
             start, stop = self.geometry.body_ranges[p]
             n = stop - start
             block = host[3 * start : 3 * stop, 3 * start : 3 * stop]  # a view: only its diagonal is written
@@ -217,12 +227,22 @@ class DoubleLayerOperator:
             row_sums = (block @ np.tile(np.eye(3, dtype=block.dtype), (n, 1))).reshape(n, 3, 3)
             a, k = np.arange(n)[:, None, None], np.arange(3)
             block[3 * a + k[None, :, None], 3 * a + k[None, None, :]] = -row_sums
-        if not self.device.is_cpu:
-            self._buffer = wp.array(host.ravel(), dtype=self.kernels.green.dtype, device=self.device)
-            matrix = self._buffer.reshape((self.size, self.size))
-        self._matrix = matrix
-        self._previous = None  # the old matrix may now be freed
-        return matrix
+
+    def _device_self_blocks(self, matrix, moved) -> None:
+        """The same with Warp kernels on the matrix where it is (identity_self_blocks,
+        write_self_blocks), for CUDA; on the CPU the BLAS product above is faster."""
+        points = self.geometry.points_of(moved)
+        if not len(points):
+            return
+        wp = self._wp
+        listed = wp.array(points.astype(np.int32), dtype=int, device=self.device)
+        if self.kind in IDENTITY_KINDS:
+            runtime.launch_rows(self.kernels.identity_self_blocks, len(points),
+                                lambda start, stop: [start, self.surface, listed, matrix], self.device)
+        else:
+            blocks = self._self_blocks()
+            runtime.launch_rows(self.kernels.write_self_blocks, len(points),
+                                lambda start, stop: [start, listed, blocks, matrix], self.device)
 
     def _moved_kept_block(self, previous, kept):
         """The previous matrix's buffer with its kept block (the bodies that did not change)
