@@ -170,7 +170,7 @@ def test_interaction_matrices_follow_from_their_symmetry_class():
     under the square's symmetries R, K(R x, R y) = R K(x, y) H(R)^T, so the matrix of offset R c
     is the one of c with the points permuted and the components rotated. Checked against the
     matrix computed directly at every offset (order of the points from ``_proxies``)."""
-    from warpbem.hydro.treecode import STRENGTHS, strength_transform
+    from warpbem.hydro.treecode import STRENGTHS, square_symmetries, strength_transform
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", wb.ContactResolutionWarning)
@@ -189,8 +189,9 @@ def test_interaction_matrices_follow_from_their_symmetry_class():
         wp.launch(tree.kernels.proxy_interactions, dim=(size, size), inputs=[0, targets, sources, out])
         return out.numpy()
 
-    for offset, (canonical, r) in tree.offsets.items():
-        pi = tree.permutations[level][tree._symmetry_index(r)]
+    symmetries = square_symmetries()
+    for offset, (canonical, index) in tree.offsets.items():
+        pi, r = tree.permutations[level][index], symmetries[index]
         k_c = direct(canonical).reshape(size, 3, size, STRENGTHS)
         expected = np.empty_like(k_c)
         expected[np.ix_(pi, range(3), pi, range(STRENGTHS))] = np.einsum(

@@ -88,9 +88,9 @@ DENSE_HEADROOM = 0.03  # a dense matrix's buffer (CPU) has room for this share m
 
 def choose_operator(size: int, dtype: str = "float64", device="cpu") -> str:
     """The operator of a run of ``size`` unknowns, decided once from the device's total memory:
-    "dense" while the matrix takes at most DENSE_MEMORY_SHARE of it (a time-stepping run holds
-    its kept previous matrix beside the one it assembles, and the solver its factored blocks),
-    else "treecode". From the total, not the free memory: the free memory falls with the run's
+    "dense" while the matrix takes at most DENSE_MEMORY_SHARE of it (room for the solver's
+    factored blocks, and for a second matrix in the steps whose kept block cannot move in place,
+    ``_moved_kept_block``), else "treecode". From the total, not the free memory: the free memory falls with the run's
     own kept systems, and a run that chose by it switched to matrix-free part-way."""
     itemsize = 8 if dtype == "float64" else 4
     device = runtime.resolve_device(device)
@@ -161,6 +161,7 @@ class DoubleLayerOperator:
         kept_rows = self.geometry.points_of(kept)
         moved_rows = self.geometry.points_of(moved)
         previous = self._previous
+        gather = len(kept_rows) > 0  # the kept bodies' blocks copied from the previous matrix
         # update the previous matrix in place, its buffer handed over, so a run holds one matrix,
         # not two: as it is where the kept bodies kept their places, or with their block moved
         # where the moving ones changed their element counts (contact refinement)
@@ -172,7 +173,7 @@ class DoubleLayerOperator:
             if matrix is not None:
                 self._buffer = previous._buffer
                 previous._matrix = previous._buffer = None  # it would assemble afresh if asked again
-                kept_rows = []  # their blocks are where they belong
+                gather = False  # their blocks are where they belong
         if matrix is None:
             # every entry is written below (gathered, assembled or a self block): no zero fill,
             # which on the CPU cost as much as the assembly itself for 1632 elements (192 MB);
@@ -184,7 +185,7 @@ class DoubleLayerOperator:
         def indices(a):
             return wp.array(np.ascontiguousarray(a, dtype=np.int32), dtype=int, device=self.device)
 
-        if len(kept_rows):
+        if gather:
             src = indices(self._previous.geometry.points_of(kept))
             dst = indices(kept_rows)
             old = self._previous.assemble()
@@ -194,7 +195,6 @@ class DoubleLayerOperator:
             del old
             self._previous._matrix = self._previous._buffer = None  # superseded: free it now
         # rows: collocation points; columns: elements, each filling the columns of its points
-        kept_rows = self.geometry.points_of(kept)
         for rows, cols in ((moved_rows, np.arange(self.geometry.n_elements)), (kept_rows, self.geometry.elements_of(moved))):
             if len(rows) and len(cols):
                 r, c = indices(rows), indices(cols)
@@ -277,11 +277,13 @@ class DoubleLayerOperator:
             host = self.assemble().numpy()
             return {p: np.array(host[3 * ranges[p][0] : 3 * ranges[p][1], 3 * ranges[p][0] : 3 * ranges[p][1]],
                                 dtype=np.float64) for p in bodies}
-        blocks = {p: self._block_from_near_field(p) for p in bodies} if self.mode == "treecode" else {}
-        return {p: blocks.get(p) if blocks.get(p) is not None else
-                DoubleLayerOperator(self.geometry.body(p), self.wall, self.quadrature, self.dtype_name, self.device,
-                                    "dense", kind=self.kind).assemble().numpy().astype(np.float64)
-                for p in bodies}
+        out = {}
+        for p in bodies:
+            block = self._block_from_near_field(p) if self.mode == "treecode" else None
+            out[p] = block if block is not None else DoubleLayerOperator(
+                self.geometry.body(p), self.wall, self.quadrature, self.dtype_name, self.device, "dense",
+                kind=self.kind).assemble().numpy().astype(np.float64)
+        return out
 
     def _block_from_near_field(self, body: int):
         """Body p's block cut from the treecode's stored near field (its self blocks added), or
@@ -289,17 +291,13 @@ class DoubleLayerOperator:
         assembling 1024 bodies alone took longer than their near field."""
         if not self.near_field_stored:
             return None
-        geo, seg = self.geometry, self.far_field.targets
+        geo = self.geometry
         m = geo.points_per_element
         starts, elements = self._near_elements
         own = np.arange(*geo.element_ranges[body])
         a0, a1 = geo.body_ranges[body]
         groups = self._point_group[a0:a1]
-        if self._point_position is None:  # of each point among its leaf's points
-            self._point_position = np.empty(geo.n_points, dtype=int)
-            self._point_position[seg["order"]] = (np.arange(len(seg["order"]))
-                                                  - np.repeat(seg["starts"], seg["stops"] - seg["starts"]))
-        position = self._point_position
+        position = self.far_field.position_in_leaf
         out = np.empty((3 * (a1 - a0), 3 * (a1 - a0)))
         blocks = self.near_blocks()
         for g in np.unique(groups):
@@ -385,7 +383,6 @@ class DoubleLayerOperator:
                        np.arange(geo.n_points) // geo.points_per_element, geo.qp_positions.reshape(-1, 3),
                        np.repeat(np.arange(geo.n_elements), n_qp), self.point_sources, options)
         group = self._point_group = far.group_of_target
-        self._point_position = None
         self._near_elements = far.near_lists(far.leaf_of_element)
         self._device_lists("near_elements", group, *self._near_elements)
         self._device_lists("near_poles", group, *far.near_lists(far.leaf_of_pole))

@@ -181,15 +181,16 @@ def square_symmetries() -> list:
 
 
 def canonical_offsets() -> dict:
-    """{offset: (canonical offset c, symmetry R)} with R c = offset, 0 <= c_y <= c_x: the 40
-    interaction offsets fall into 7 classes, so 7 matrices per level, not 40."""
+    """{offset: (canonical offset c, index k of the symmetry R in ``square_symmetries``)} with
+    R c = offset, 0 <= c_y <= c_x: the 40 interaction offsets fall into 7 classes, so 7
+    matrices per level, not 40."""
     offsets = sorted({o for parity in ((0, 0), (0, 1), (1, 0), (1, 1)) for o in interaction_offsets(parity)})
     out = {}
     for o in offsets:
         c = tuple(sorted((abs(o[0]), abs(o[1])), reverse=True))
-        for r in square_symmetries():
+        for k, r in enumerate(square_symmetries()):
             if np.array_equal(r[:2, :2] @ np.array(c), np.array(o)):
-                out[o] = (c, r)
+                out[o] = (c, k)
                 break
     return out
 
@@ -236,6 +237,9 @@ class FarField:
             self.transfer = {side: [self._child_interpolation(level, side) for level in range(tree.levels)]
                              for side in ("sources", "targets")}
             self.offsets = canonical_offsets()
+            # per symmetry R: R itself (velocities) and H(R) (strengths), in the kernels' precision
+            self.symmetries = [(r.astype(self.dtype), strength_transform(r).astype(self.dtype))
+                               for r in square_symmetries()]
             self.interactions = {level: self._interaction_matrices(level) for level in range(2, tree.levels + 1)}
             self.permutations = {level: self._proxy_permutations(level) for level in range(2, tree.levels + 1)}
             self.occupied = self._occupied_boxes()
@@ -360,6 +364,14 @@ class FarField:
         return held + sum(seg[k].nbytes for seg in (self.sources, self.targets) for k in ("lateral", "vertical"))
 
     @property
+    def position_in_leaf(self) -> np.ndarray:
+        """The position of every target among its leaf's targets (in ``targets["order"]``)."""
+        seg = self.targets
+        position = np.empty(len(seg["order"]), dtype=int)
+        position[seg["order"]] = np.arange(len(seg["order"])) - np.repeat(seg["starts"], seg["stops"] - seg["starts"])
+        return position
+
+    @property
     def group_of_target(self) -> np.ndarray:
         """The occupied leaf (its index in ``near_lists``) of every target, in the given order."""
         seg = self.targets
@@ -445,7 +457,7 @@ class FarField:
         local = np.zeros((m, m, size * 3), dtype=self.dtype)
         source_grid, target_grid = self.occupied[level]
         ii, jj = np.meshgrid(np.arange(m), np.arange(m), indexing="ij")
-        for offset, (canonical, r) in self.offsets.items():
+        for offset, (canonical, k) in self.offsets.items():
             si, sj = ii + offset[0], jj + offset[1]
             ok = (si >= 0) & (si < m) & (sj >= 0) & (sj < m) & target_grid
             ok &= (np.abs(si // 2 - ii // 2) <= 1) & (np.abs(sj // 2 - jj // 2) <= 1)
@@ -453,20 +465,16 @@ class FarField:
             if not ok.any():
                 continue
             right, left = self.interactions[level][canonical]
-            pi = self.permutations[level][self._symmetry_index(r)]
+            pi = self.permutations[level][k]
+            r, h = self.symmetries[k]
             rank = right.shape[1]
             # K_{Rc}[pi(t), pi(j)] = R K_c[t, j] H^T: rotate the factors' components, permute their points
             right_o = np.empty((size, STRENGTHS, rank), dtype=self.dtype)
-            right_o[pi] = np.einsum("ab,jbr->jar", strength_transform(r).astype(self.dtype),
-                                    right.reshape(size, STRENGTHS, rank))
+            right_o[pi] = np.einsum("ab,jbr->jar", h, right.reshape(size, STRENGTHS, rank))
             left_o = np.empty((size, 3, rank), dtype=self.dtype)
-            left_o[pi] = np.einsum("ab,tbr->tar", r.astype(self.dtype), left.reshape(size, 3, rank))
+            left_o[pi] = np.einsum("ab,tbr->tar", r, left.reshape(size, 3, rank))
             local[ok] += (flat[si[ok], sj[ok]] @ right_o.reshape(-1, rank)) @ left_o.reshape(-1, rank).T
         return local.reshape(m, m, pl, pl, pz, 3).astype(np.float64)
-
-    @staticmethod
-    def _symmetry_index(r: np.ndarray) -> int:
-        return next(i for i, s in enumerate(square_symmetries()) if np.array_equal(s, r))
 
     @staticmethod
     def _to_parent(children: np.ndarray, transfer) -> np.ndarray:
