@@ -39,7 +39,11 @@ viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
                                 reuse_lateral (m; their lateral lattice with several bodies,
                                 default 50 x reuse_tolerance), reuse_interaction (m; the height
                                 lattice of the several-body snapshots, default 10 x
-                                reuse_tolerance)
+                                reuse_tolerance), near_far_cutoff (m; adherent cells whose
+                                bounding sphere stays farther than it from every free cell's keep
+                                the background solved once, warpbem/hydro/frozen.py; README
+                                "Frozen adherent arrays" charts the error; default: every solve
+                                holds every body)
     [[bodies]]                  name, position = [x, y, z], orientation = [w, x, y, z],
                                 fixed = false, density = 1000.0, force = [0, 0, 0] (N),
                                 torque = [0, 0, 0] (N m) on free bodies, adhesive = true (free
@@ -51,6 +55,11 @@ viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
     [bodies.mesh]               shape = "sphere" (radius, subdivisions, pole_grading: elements
                                 crowded towards -z, 1 = uniform) | "spheroid" (radius,
                                 aspect_ratio, subdivisions) | "file" (path, relative to the scene)
+
+    [[arrays]]                  count = [nx, ny] bodies alike at origin = [x, y, z] + (i pitch_x,
+                                j pitch_y, 0), pitch = [pitch_x, pitch_y], named "<name> i j",
+                                with any body key but position (one mesh for all); listed after
+                                the [[bodies]]
 
 ``--set key=value`` overrides use the dotted names, e.g. ``flow.shear_rate=80`` or
 ``bodies.0.position=[0,0,7.75e-6]``.
@@ -205,8 +214,8 @@ def _mesh(where, spec, folder: Path):
 def parse(table: dict, folder: Path = Path(".")) -> Scene:
     """Validate a scene table (as read from TOML) and build the Scene."""
     _table("scene", table, {"flow", "physics", "repulsion", "adhesion", "deformation", "time", "solver",
-                           "bodies", "sweep"},
-           ("flow", "time", "bodies"))
+                           "bodies", "arrays", "sweep"},
+           ("flow", "time"))
     sweep = _sweep_axes(table.get("sweep", {}))
     flow = _table("flow", table["flow"], {"shear_rate", "viscosity", "wall"}, ("shear_rate",))
     physics = _table("physics", table.get("physics", {}), {"gravity", "fluid_density", "repulsion", "adhesion"})
@@ -225,36 +234,16 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
     solver = _table("solver", table.get("solver", {}), {"quadrature_order", "density_order", "contact_refinement",
                                                         "tolerance",
                                                         "refine_fixed_at_wall", "dtype", "reuse_tolerance",
-                                                        "reuse_lateral", "reuse_interaction"})
-    if not isinstance(table["bodies"], list) or not table["bodies"]:
-        raise SceneError("bodies: expected at least one [[bodies]] entry")
+                                                        "reuse_lateral", "reuse_interaction", "near_far_cutoff"})
     bodies = []
-    for i, spec in enumerate(table["bodies"]):
+    for i, spec in enumerate(_entries("bodies", table.get("bodies", []))):
         where = f"bodies.{i}"
-        _table(where, spec, {"name", "mesh", "position", "orientation", "fixed", "density", "force", "torque",
-                             "adhesive", "shear_modulus", "poisson_ratio", "ligands", "deformable"},
-               ("mesh", "position"))
-        bodies.append(BodySpec(str(spec.get("name", f"body{i}")), _mesh(f"{where}.mesh", spec["mesh"], folder),
-                               _vector(f"{where}.position", spec["position"], 3),
-                               _vector(f"{where}.orientation", spec.get("orientation", [1.0, 0, 0, 0]), 4),
-                               _bool(f"{where}.fixed", spec.get("fixed", False)),
-                               _number(f"{where}.density", spec.get("density", 1000.0), 100.0, 1e5),
-                               _vector(f"{where}.force", spec.get("force", [0.0, 0.0, 0.0]), 3),
-                               _vector(f"{where}.torque", spec.get("torque", [0.0, 0.0, 0.0]), 3),
-                               _bool(f"{where}.adhesive", spec.get("adhesive", True)),
-                               None if "shear_modulus" not in spec else
-                               _number(f"{where}.shear_modulus", spec["shear_modulus"], 0, 1e12, low_open=True),
-                               _poisson(f"{where}.poisson_ratio", spec.get("poisson_ratio", 0.33)),
-                               _bool(f"{where}.ligands", spec.get("ligands", False)),
-                               _bool(f"{where}.deformable", spec.get("deformable", False))))
-        if bodies[-1].deformable and (bodies[-1].fixed or bodies[-1].shear_modulus is None):
-            raise SceneError(f"{where}.deformable: a deformable body must be free and give its shear_modulus (Pa;"
-                             " fixed cells are not deformed yet)")
-        if bodies[-1].ligands and not bodies[-1].fixed:
-            raise SceneError(f"{where}.ligands: ligands are modelled on fixed (adherent) cells only")
-        if bodies[-1].fixed and (any(bodies[-1].force) or any(bodies[-1].torque)):
-            raise SceneError(f"{where}.force: body {i} is fixed; its load is what holds it (an output), so give"
-                             " force and torque for free bodies only")
+        _table(where, spec, BODY_KEYS, ("mesh", "position"))
+        bodies.append(_body(where, spec, _mesh(f"{where}.mesh", spec["mesh"], folder)))
+    for i, spec in enumerate(_entries("arrays", table.get("arrays", []))):
+        bodies += _array(f"arrays.{i}", spec, folder)
+    if not bodies:
+        raise SceneError("bodies: expected at least one [[bodies]] or [[arrays]] entry")
     end = _number("time.end", time["end"], 0, 1e6, low_open=True)
     dt_max = _number("time.dt_max", time.get("dt_max", 1e-4), 0, 10, low_open=True)
     dt_min = _number("time.dt_min", time.get("dt_min", min(1e-5, dt_max)), 0, dt_max, low_open=True)
@@ -311,12 +300,69 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
                            _number("solver.reuse_lateral", solver["reuse_lateral"], 0, 1e-5, low_open=True)),
             reuse_interaction=(None if "reuse_interaction" not in solver else
                                _number("solver.reuse_interaction", solver["reuse_interaction"], max(reuse, 1e-12),
-                                       1e-6))),
+                                       1e-6)),
+            near_far_cutoff=(None if "near_far_cutoff" not in solver else
+                             _number("solver.near_far_cutoff", solver["near_far_cutoff"], 0, 1e-2))),
         policy=StepPolicy(dt_max, dt_min,
                           _number("time.contact_gap", time.get("contact_gap", 5e-7), 0, 1e-2, low_open=True)),
         scheme=scheme)
     return Scene(raw=copy.deepcopy(table), bodies=tuple(bodies), model=model, end=end, frame_every=frame_every,
                  frame_interval=frame_interval, sweep=sweep)
+
+
+BODY_KEYS = {"name", "mesh", "position", "orientation", "fixed", "density", "force", "torque", "adhesive",
+             "shear_modulus", "poisson_ratio", "ligands", "deformable"}
+ARRAY_KEYS = {"count", "pitch", "origin"}
+
+
+def _entries(where, value) -> list:
+    if not isinstance(value, list):
+        raise SceneError(f"{where}: expected a list of tables ([[{where}]] entries), got {value!r}")
+    return value
+
+
+def _body(where, spec, mesh, name=None, position=None) -> BodySpec:
+    """One body's keys (BODY_KEYS, checked by the caller) as a BodySpec; ``name`` and
+    ``position`` given for the members of an array."""
+    body = BodySpec(name or str(spec.get("name", where.replace("bodies.", "body"))), mesh,
+                    position or _vector(f"{where}.position", spec["position"], 3),
+                    _vector(f"{where}.orientation", spec.get("orientation", [1.0, 0, 0, 0]), 4),
+                    _bool(f"{where}.fixed", spec.get("fixed", False)),
+                    _number(f"{where}.density", spec.get("density", 1000.0), 100.0, 1e5),
+                    _vector(f"{where}.force", spec.get("force", [0.0, 0.0, 0.0]), 3),
+                    _vector(f"{where}.torque", spec.get("torque", [0.0, 0.0, 0.0]), 3),
+                    _bool(f"{where}.adhesive", spec.get("adhesive", True)),
+                    None if "shear_modulus" not in spec else
+                    _number(f"{where}.shear_modulus", spec["shear_modulus"], 0, 1e12, low_open=True),
+                    _poisson(f"{where}.poisson_ratio", spec.get("poisson_ratio", 0.33)),
+                    _bool(f"{where}.ligands", spec.get("ligands", False)),
+                    _bool(f"{where}.deformable", spec.get("deformable", False)))
+    if body.deformable and (body.fixed or body.shear_modulus is None):
+        raise SceneError(f"{where}.deformable: a deformable body must be free and give its shear_modulus (Pa;"
+                         " fixed cells are not deformed yet)")
+    if body.ligands and not body.fixed:
+        raise SceneError(f"{where}.ligands: ligands are modelled on fixed (adherent) cells only")
+    if body.fixed and (any(body.force) or any(body.torque)):
+        raise SceneError(f"{where}.force: the body is fixed; its load is what holds it (an output), so give"
+                         " force and torque for free bodies only")
+    return body
+
+
+def _array(where, spec, folder) -> list:
+    """An [[arrays]] entry: count = [nx, ny] bodies alike (the body keys but position) at origin
+    + (i pitch_x, j pitch_y, 0), named "<name> i j", sharing one mesh."""
+    _table(where, spec, (BODY_KEYS - {"position"}) | ARRAY_KEYS, ("mesh", "count", "pitch", "origin"))
+    count = spec["count"]
+    if not isinstance(count, list) or len(count) != 2:
+        raise SceneError(f"{where}.count: expected [nx, ny], got {count!r}")
+    nx, ny = (_number(f"{where}.count[{k}]", c, 1, 4096, integer=True) for k, c in enumerate(count))
+    pitch = _vector(f"{where}.pitch", spec["pitch"], 2)
+    origin = _vector(f"{where}.origin", spec["origin"], 3)
+    mesh = _mesh(f"{where}.mesh", spec["mesh"], folder)
+    name = str(spec.get("name", where))
+    return [_body(where, spec, mesh, f"{name} {i} {j}",
+                  (origin[0] + i * pitch[0], origin[1] + j * pitch[1], origin[2]))
+            for i in range(nx) for j in range(ny)]
 
 
 def _poisson(where, value):

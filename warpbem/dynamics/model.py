@@ -11,6 +11,7 @@ from functools import cached_property
 import numpy as np
 
 from ..forces.interaction import Interaction
+from ..hydro.frozen import FrozenArraySolver
 from ..hydro.mobility import MobilitySolver
 from ..surfaces.body import Body
 from ..surfaces.gaps import outer_radius
@@ -50,6 +51,9 @@ class SolverOptions:
     reuse_tolerance: float = 0.0  # m: 0 solves every state; > 0 reuses snapshots (hydrodynamics.py)
     reuse_lateral: float | None = None  # m: their lateral lattice with several bodies (None: 50 x)
     reuse_interaction: float | None = None  # m: heights of the several-body snapshots (None: 10 x)
+    # m: adherent cells farther than this from every free cell keep the background solved once
+    # (hydro/frozen.py); None: every solve holds every body
+    near_far_cutoff: float | None = None
 
     def __post_init__(self):
         if not (np.isfinite(self.reuse_tolerance) and self.reuse_tolerance >= 0):
@@ -59,13 +63,16 @@ class SolverOptions:
         if self.reuse_interaction is not None and not (np.isfinite(self.reuse_interaction)
                                                        and self.reuse_interaction >= self.reuse_tolerance > 0):
             raise ValueError(f"reuse_interaction must be >= reuse_tolerance > 0 (m), got {self.reuse_interaction!r}")
+        if self.near_far_cutoff is not None and not (np.isfinite(self.near_far_cutoff) and self.near_far_cutoff >= 0):
+            raise ValueError(f"near_far_cutoff must be >= 0 (m) or None, got {self.near_far_cutoff!r}")
 
-    def build(self, flow: Flow, device) -> MobilitySolver:
-        return MobilitySolver(flow.shear_rate, flow.viscosity, flow.wall, device,
-                              quadrature_order=self.quadrature_order, tolerance=self.tolerance,
-                              max_iterations=self.max_iterations, dtype=self.dtype, operator=self.operator,
-                              contact_refinement=self.contact_refinement,
-                              refine_fixed_at_wall=self.refine_fixed_at_wall, density_order=self.density_order)
+    def build(self, flow: Flow, device) -> MobilitySolver | FrozenArraySolver:
+        solver = MobilitySolver(flow.shear_rate, flow.viscosity, flow.wall, device,
+                                quadrature_order=self.quadrature_order, tolerance=self.tolerance,
+                                max_iterations=self.max_iterations, dtype=self.dtype, operator=self.operator,
+                                contact_refinement=self.contact_refinement,
+                                refine_fixed_at_wall=self.refine_fixed_at_wall, density_order=self.density_order)
+        return solver if self.near_far_cutoff is None else FrozenArraySolver(solver, self.near_far_cutoff)
 
 
 @dataclass(frozen=True)

@@ -43,6 +43,7 @@ an O(h^2) error (sphere under torque, 96 elements: 5e-3 -> 1.7e-4).
 
 from __future__ import annotations
 
+import copy
 import warnings
 from dataclasses import dataclass
 
@@ -113,7 +114,7 @@ def checked_bodies(bodies) -> list:
     return bodies
 
 
-def _load_array(name, value, bodies, fixed_allowed: bool = False):
+def checked_loads(name, value, bodies, fixed_allowed: bool = False):
     """(n, 3) loads, one row per body, checked; a fixed body's row must be zero unless
     ``fixed_allowed`` (its load is then an input, e.g. the traction problem's)."""
     n = len(bodies)
@@ -394,7 +395,7 @@ class MobilitySolver:
         self.dtype = dtype
         if operator not in OPERATOR_MODES:
             raise ValueError(f"operator mode must be one of {OPERATOR_MODES}, got {operator!r}")
-        self.operator = operator  # "auto" is decided at the first solve, for the whole run
+        self.operator = self.operator_setting = operator  # "auto" is decided at the first solve, for the whole run
         self.treecode = treecode or TreecodeOptions()
         if density_order not in DENSITY_ORDERS:
             raise ValueError(f"density_order must be one of {DENSITY_ORDERS}, got {density_order!r}")
@@ -413,17 +414,22 @@ class MobilitySolver:
         self._warned = set()  # contacts already reported by this solver
 
     def solve(self, bodies, forces=None, torques=None, initial_guess=None,
-              check_placement_first: bool = True, background: bool = True) -> MobilitySolution:
+              check_placement_first: bool = True, background: bool = True, ambient_flow=None) -> MobilitySolution:
         """Solve for the bodies of the moment. ``check_placement_first=False`` skips the overlap
         and wall checks, for callers that have just checked these very bodies (time stepping).
 
         ``background=False`` gives the response to the loads alone (no shear flow, fixed bodies
         at rest), e.g. the mobility of a contact for an implicit contact force; such a solve
         reuses the whole system of a preceding solve of the same bodies and leaves the warm
-        start of the next ordinary solve alone."""
+        start of the next ordinary solve alone.
+
+        ``ambient_flow``: the undisturbed flow in place of the shear flow, a function of the
+        collocation points (m, (n, 3)) and the index of each point's body (n,) giving the
+        velocity there (m/s, (n, 3)); the flow of frozen adherent cells that are not among the
+        bodies (``frozen.py``). Ignored with ``background=False``."""
         bodies = checked_bodies(bodies)
-        forces = _load_array("forces", forces, bodies)
-        torques = _load_array("torques", torques, bodies)
+        forces = checked_loads("forces", forces, bodies)
+        torques = checked_loads("torques", torques, bodies)
         if check_placement_first:
             check_placement(bodies, self.wall)
 
@@ -464,7 +470,9 @@ class MobilitySolver:
         rhs = np.zeros(system.size)
         xi = geometry.collocation
         ambient = np.zeros_like(xi)
-        if background:
+        if background and ambient_flow is not None:
+            ambient = ambient_flow(xi * length, geometry.body_of_point) / speed
+        elif background:
             ambient[:, 0] = self.shear_rate * length / speed * xi[:, 2]
         rhs[:] = -ambient.ravel()
         free_loads = {p: np.concatenate([forces[p] / force_scale, torques[p] / (force_scale * length)])
@@ -513,6 +521,19 @@ class MobilitySolver:
                                 result.residual, result.converged, double_layer.mode, x,
                                 double_layer.reused_bodies)
 
+
+    def fresh(self) -> "MobilitySolver":
+        """A solver with these settings and nothing of this one's solves (no kept system, no
+        warnings given, "auto" operator not yet decided)."""
+        other = copy.copy(self)
+        other.operator, other._last, other._warned = self.operator_setting, None, set()
+        return other
+
+    @property
+    def last_system(self):
+        """(CompletedDoubleLayer, scaled solution, velocity scale in m/s) of the last ordinary
+        solve (``reuse=True``), or None: the density a caller evaluates elsewhere (``frozen.py``)."""
+        return None if self._last is None else self._last[:3]
 
     def _warn_unresolved(self, geometry, length):
         """Warn once per contact (for the life of this solver) that is closer than the contact

@@ -97,6 +97,15 @@ def choose_operator(size: int, dtype: str = "float64", device="cpu") -> str:
     return "dense" if size**2 * itemsize <= DENSE_MEMORY_SHARE * runtime.total_memory(device) else "treecode"
 
 
+def quadrature_strengths(geometry: SurfaceGeometry, density: np.ndarray) -> np.ndarray:
+    """(n_qp, 9) the treecode's strengths of a density: at every regular quadrature point y_s
+    the density there (its basis, ``basis_at_gauss_points``) times the area vector n_s w_s,
+    component 3 k + i = q_i a_k (the far field of an element is its plain Gauss sum)."""
+    values = np.asarray(density, dtype=np.float64).reshape(geometry.n_elements, geometry.points_per_element, 3)
+    at_qp = np.einsum("ql,eli->eqi", basis_at_gauss_points(geometry.density_order, geometry.order), values)
+    return np.einsum("eqk,eqi->eqki", geometry.qp_area_vectors, at_qp).reshape(-1, 9)
+
+
 class DoubleLayerOperator:
     """A boundary-integral operator of one kernel ``kind`` (``kernels/assembly.py``: the double
     layer, by default, its adjoint, the single layers, the elastic double layer's parts) over
@@ -382,7 +391,7 @@ class DoubleLayerOperator:
         far = FarField(self.kernels, self.device, geo.element_nodes[:, 8], geo.collocation,
                        np.arange(geo.n_points) // geo.points_per_element, geo.qp_positions.reshape(-1, 3),
                        np.repeat(np.arange(geo.n_elements), n_qp), self.point_sources, options)
-        group = self._point_group = far.group_of_target
+        group = self._point_group = far.group_of_target()
         self._near_elements = far.near_lists(far.leaf_of_element)
         self._device_lists("near_elements", group, *self._near_elements)
         self._device_lists("near_poles", group, *far.near_lists(far.leaf_of_pole))
@@ -429,10 +438,7 @@ class DoubleLayerOperator:
         double layer and of the point forces at ``point_sources`` (one force (3,) per pole)."""
         geo = self.geometry
         out = self._stored_near_sum(density) if self.near_field_stored else self._listed_sum(density, "near_elements")
-        m = geo.points_per_element
-        values = density.astype(np.float64).reshape(geo.n_elements, m, 3)
-        at_qp = np.einsum("ql,eli->eqi", basis_at_gauss_points(geo.density_order, geo.order), values)
-        strengths = np.einsum("eqk,eqi->eqki", geo.qp_area_vectors, at_qp).reshape(-1, 9)
+        strengths = quadrature_strengths(geo, density)
         if pole_forces is not None:
             pole_forces = np.asarray(pole_forces, dtype=np.float64).reshape(-1, 3)
             out += self._pole_sum(self.geometry.collocation, self.point_sources, pole_forces, "near_poles").ravel()
@@ -464,6 +470,31 @@ class DoubleLayerOperator:
         pole_forces = np.asarray(pole_forces, dtype=np.float64).reshape(-1, 3)
         near = self._pole_sum(self.geometry.collocation, self.point_sources, pole_forces, "near_poles")
         return near + self.far_field.apply(np.zeros((self.far_field.n_qp, 9)), pole_forces)
+
+    def field_at(self, targets: np.ndarray, density: np.ndarray, pole_forces: np.ndarray | None = None,
+                 element_lists=None, pole_lists=None) -> np.ndarray:
+        """(T, 3) the double layer of ``density`` (scaled, viscosity 1), with the Stokeslets of
+        ``pole_forces`` at the ``point_sources``, at points off the surfaces (kernel
+        ``field_at_points``: nearly singular element integrals adaptive): over every element and
+        pole, or over the listed ones per target (``element_lists``, ``pole_lists``: (group of
+        each target, CSR starts, items), as ``FarField.near_lists``)."""
+        wp = self._wp
+        n = len(targets)
+        every = np.zeros(n)
+        group, starts, items = element_lists or (every, [0, self.geometry.n_elements], np.arange(self.geometry.n_elements))
+        lists = [wp.array(np.ascontiguousarray(a, dtype=np.int32), dtype=int, device=self.device)
+                 for a in (group, starts, items)]
+        vec3 = self.kernels.green.vec3
+        t = wp.array(np.ascontiguousarray(targets, dtype=self.np_dtype), dtype=vec3, device=self.device)
+        q = wp.array(np.ascontiguousarray(density, dtype=self.np_dtype).reshape(-1, 3), dtype=vec3, device=self.device)
+        out = wp.zeros(n, dtype=vec3, device=self.device)
+        runtime.launch_rows(self.kernels.field_at_points, n,
+                            lambda start, stop: [start, self.surface, q, t, *lists, out[start:stop]], self.device)
+        velocity = out.numpy().astype(np.float64)
+        if pole_forces is not None:
+            pole_lists = pole_lists or (every, [0, len(self.point_sources)], np.arange(len(self.point_sources)))
+            velocity += self._pole_sum(targets, self.point_sources, pole_forces, pole_lists)
+        return velocity
 
     def _pole_sum(self, targets, poles, forces, lists) -> np.ndarray:
         """sum over each target's listed poles (a name of ``_lists`` or a triple) of G f."""

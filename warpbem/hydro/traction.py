@@ -59,7 +59,7 @@ import scipy.sparse.linalg as spla
 from ..surfaces.placement import check_placement
 from .geometry import SurfaceGeometry
 from .linalg import gmres
-from .mobility import DEFAULT_TOLERANCE, _finite, _load_array, checked_bodies
+from .mobility import DEFAULT_TOLERANCE, _finite, checked_loads, checked_bodies
 from .operators import DoubleLayerOperator, QuadratureOptions
 
 
@@ -171,8 +171,8 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wal
     viscosity = _finite("viscosity", viscosity, positive=True)
     if dtype not in DEFAULT_TOLERANCE:
         raise ValueError(f"dtype must be one of {sorted(DEFAULT_TOLERANCE)}, got {dtype!r}")
-    fluid_force = -_load_array("forces", forces, bodies, fixed_allowed=True)
-    fluid_torque = -_load_array("torques", torques, bodies, fixed_allowed=True)
+    fluid_force = -checked_loads("forces", forces, bodies, fixed_allowed=True)
+    fluid_torque = -checked_loads("torques", torques, bodies, fixed_allowed=True)
     check_placement(bodies, wall)
 
     length = float(np.mean([b.mesh.equivalent_radius() for b in bodies]))

@@ -209,20 +209,24 @@ class FarField:
     elements and at point-force poles, for one geometry (module docstring).
 
     element_of_target / element_of_source: the element each target / quadrature source belongs
-    to (their box is that of its centre); poles: (P, 3) point-force positions (their own box)."""
+    to (their box is that of its centre); poles: (P, 3) point-force positions (their own box);
+    cover: points the tree's boxes must reach besides these (laterally and in height), for
+    targets given later (``segments_at``)."""
 
     def __init__(self, kernels, device, element_centres, targets, element_of_target,
-                 sources, element_of_source, poles, options: TreecodeOptions):
+                 sources, element_of_source, poles, options: TreecodeOptions, cover: np.ndarray | None = None):
         self.options = options
         self.kernels = kernels
         self.device = device
         self.dtype = np.float64 if kernels.green.dtype == runtime.init().float64 else np.float32
-        all_points = np.concatenate([targets, sources, poles])
+        cover = np.zeros((0, 3)) if cover is None else np.asarray(cover, dtype=float).reshape(-1, 3)
+        all_points = np.concatenate([targets, sources, poles, cover])
         # an element's points lie in its box widened by their largest lateral offset from its centre
         margins = {side: float(np.linalg.norm(points[:, :2] - element_centres[owner, :2], axis=1).max(initial=0.0))
                    for side, points, owner in (("sources", sources, element_of_source),
                                                ("targets", targets, element_of_target))}
-        self.tree = tree = LateralTree(element_centres, poles, margins, (all_points[:, 2].min(), all_points[:, 2].max()))
+        self.tree = tree = LateralTree(element_centres, np.concatenate([poles, cover]), margins,
+                                       (all_points[:, 2].min(), all_points[:, 2].max()))
         n = 2**tree.levels
         self.points = [self.points_per_direction(level) for level in range(tree.levels + 1)]
         leaf_of_element = tree.leaf_of(element_centres)
@@ -242,7 +246,8 @@ class FarField:
                                for r in square_symmetries()]
             self.interactions = {level: self._interaction_matrices(level) for level in range(2, tree.levels + 1)}
             self.permutations = {level: self._proxy_permutations(level) for level in range(2, tree.levels + 1)}
-            self.occupied = self._occupied_boxes()
+            # with a cover, targets given later may lie in any box: the far field reaches every one
+            self.occupied = self._occupied_boxes(every_target=len(cover) > 0)
 
     def points_per_direction(self, level: int) -> tuple:
         """(lateral, vertical) Chebyshev points per direction in the boxes of ``level``: the
@@ -273,6 +278,21 @@ class FarField:
         lateral = (lx[:, :, None] * ly[:, None, :]).reshape(len(order), lateral_points**2)
         return dict(order=order, boxes=boxes, starts=starts, stops=stops, lateral=lateral,
                     vertical=lagrange_basis(u[:, 2], vertical_points))
+
+    def covers(self, points: np.ndarray) -> np.ndarray:
+        """Per point: whether it lies in the tree's domain (its leaves laterally, the height
+        range of the boxes), where ``segments_at`` interpolates and does not extrapolate."""
+        tree = self.tree
+        lateral = (points[:, :2] - tree.origin) / tree.side
+        return (np.all((lateral >= 0.0) & (lateral <= 1.0), axis=1)
+                & (points[:, 2] >= tree.z_range[0]) & (points[:, 2] <= tree.z_range[1]))
+
+    def segments_at(self, points: np.ndarray) -> dict:
+        """Targets given now (``covers`` them), each in the leaf of its own lateral position:
+        their interpolation weights for ``interpolate``."""
+        if not self.covers(points).all():
+            raise ValueError("targets outside the tree's domain: build it with them in ``cover``")
+        return self._segments(self.tree.leaf_of(points), points, 2**self.tree.levels, "targets")
 
     def _child_interpolation(self, level: int, side: str):
         """T_lateral (2, a, A): the parent's (``level``) basis A at the child's point a, c the
@@ -336,8 +356,9 @@ class FarField:
             out[k] = (moved[0] * lateral_points + moved[1]) * vertical_points + c.ravel()
         return out
 
-    def _occupied_boxes(self) -> list:
-        """Per level: boolean (n, n) grids of boxes holding sources and of boxes holding targets."""
+    def _occupied_boxes(self, every_target: bool = False) -> list:
+        """Per level: boolean (n, n) grids of boxes holding sources and of boxes holding targets
+        (``every_target``: every box counts as holding targets)."""
         out = []
         for level in range(self.tree.levels + 1):
             n = 2**level
@@ -349,6 +370,8 @@ class FarField:
                 grid = np.zeros((n, n), dtype=bool)
                 grid[i, j] = True
                 grids.append(grid)
+            if every_target:
+                grids[1][:] = True
             out.append(grids)
         return out
 
@@ -371,23 +394,23 @@ class FarField:
         position[seg["order"]] = np.arange(len(seg["order"])) - np.repeat(seg["starts"], seg["stops"] - seg["starts"])
         return position
 
-    @property
-    def group_of_target(self) -> np.ndarray:
-        """The occupied leaf (its index in ``near_lists``) of every target, in the given order."""
-        seg = self.targets
+    def group_of_target(self, segments: dict | None = None) -> np.ndarray:
+        """The occupied leaf (its index in ``near_lists``) of every target, in the given order
+        (of ``segments``, default the tree's targets)."""
+        seg = self.targets if segments is None else segments
         group = np.empty(len(seg["order"]), dtype=np.int32)
         group[seg["order"]] = np.repeat(np.arange(len(seg["boxes"])), seg["stops"] - seg["starts"])
         return group
 
-    def near_lists(self, leaf_of_item: np.ndarray):
+    def near_lists(self, leaf_of_item: np.ndarray, segments: dict | None = None):
         """CSR lists (starts, items) of the items (elements or poles, by their flat leaf index)
         in each occupied target leaf's own and 8 neighbouring leaves: its near field, the part
-        the far field leaves out."""
+        the far field leaves out (the leaves of ``segments``, default the tree's targets)."""
         n = 2**self.tree.levels
         order = np.argsort(leaf_of_item, kind="stable")
         sorted_leaves = leaf_of_item[order]
         lists = []
-        for box in self.targets["boxes"]:
+        for box in (self.targets if segments is None else segments)["boxes"]:
             i, j = divmod(int(box), n)
             chunks = []
             for di in (-1, 0, 1):
@@ -410,9 +433,16 @@ class FarField:
     def apply(self, qp_strengths: np.ndarray, pole_forces: np.ndarray | None = None) -> np.ndarray:
         """(T, 3) far-field velocity (times viscosity) at the targets of quadrature-point
         strengths (n_qp, 9) and pole forces (n_poles, 3), in the targets' given order."""
-        n_targets = len(self.targets["order"])
         if not self.has_far_field:
-            return np.zeros((n_targets, 3))
+            return np.zeros((len(self.targets["order"]), 3))
+        return self.interpolate(self.local_values(qp_strengths, pole_forces), self.targets)
+
+    def local_values(self, qp_strengths: np.ndarray, pole_forces: np.ndarray | None = None) -> np.ndarray | None:
+        """(n_leaves, p_l^2, 3 p_z) far-field velocities at every leaf's Chebyshev points (the far
+        field felt in the leaf, to ``interpolate`` to any point in it), or None without a far
+        field (fewer than 3 levels)."""
+        if not self.has_far_field:
+            return None
         levels = self.tree.levels
         strengths = np.zeros((self.n_qp + self.n_poles, STRENGTHS))
         strengths[: self.n_qp, :9] = qp_strengths
@@ -435,15 +465,21 @@ class FarField:
             if local is not None:  # parents to children (L2L)
                 received += self._to_children(local, self.transfer["targets"][level - 1])
             local = received
-        pl, pz = self.points[levels]
-        values = local.reshape(n * n, pl * pl, pz * 3)
-        seg = self.targets
+        return local.reshape(n * n, pl * pl, pz * 3)
+
+    def interpolate(self, values: np.ndarray | None, segments: dict) -> np.ndarray:
+        """(T, 3) the far field of ``local_values`` at the targets of ``segments`` (L2P), in
+        their given order (zero without a far field)."""
+        n_targets = len(segments["order"])
+        if values is None:
+            return np.zeros((n_targets, 3))
+        pz = self.points[self.tree.levels][1]
         sorted_out = np.zeros((n_targets, 3))
-        for box, a, b in zip(seg["boxes"], seg["starts"], seg["stops"]):  # interpolation (L2P)
-            u = (seg["lateral"][a:b] @ values[box]).reshape(b - a, pz, 3)
-            sorted_out[a:b] = np.einsum("tc,tcj->tj", seg["vertical"][a:b], u)
+        for box, a, b in zip(segments["boxes"], segments["starts"], segments["stops"]):
+            u = (segments["lateral"][a:b] @ values[box]).reshape(b - a, pz, 3)
+            sorted_out[a:b] = np.einsum("tc,tcj->tj", segments["vertical"][a:b], u)
         out = np.zeros((n_targets, 3))
-        out[seg["order"]] = sorted_out
+        out[segments["order"]] = sorted_out
         return out
 
     def _interactions_at(self, level: int, multipoles: np.ndarray) -> np.ndarray:
