@@ -29,8 +29,8 @@ def write(tmp_path, table):
         if key in table:
             lines.append(f"[{key}]")
             lines += [emit(k, v) for k, v in table[key].items()]
-    for body in table.get("bodies", []):
-        lines.append("[[bodies]]")
+    for entry, body in [("bodies", b) for b in table.get("bodies", [])] + [("arrays", a) for a in table.get("arrays", [])]:
+        lines.append(f"[[{entry}]]")
         for k, v in body.items():
             if isinstance(v, dict):
                 lines.append(f"{k} = {{ " + ", ".join(emit(a, b) for a, b in v.items()) + " }")
@@ -39,6 +39,37 @@ def write(tmp_path, table):
     path = tmp_path / "scene.toml"
     path.write_text("\n".join(lines) + "\n")
     return path
+
+
+ARRAY = {"name": "dome", "count": [3, 2], "pitch": [20e-6, 25e-6], "origin": [30e-6, -10e-6, 6e-6], "fixed": True,
+         "mesh": {"shape": "sphere", "radius": 5e-6, "subdivisions": 2}}
+
+
+def test_arrays_expand_into_named_bodies_on_their_grid_sharing_one_mesh(tmp_path):
+    """[[arrays]]: count[0] x count[1] bodies at origin + (i pitch_x, j pitch_y, 0), after the
+    [[bodies]], named "<name> i j", with the array's body keys, one mesh for all."""
+    loaded = scene.load(write(tmp_path, dict(BASE, arrays=[ARRAY], solver={"near_far_cutoff": 3e-5})))
+    members = loaded.bodies[1:]
+    assert [b.name for b in members] == [f"dome {i} {j}" for i in range(3) for j in range(2)]
+    np.testing.assert_allclose([b.position for b in members],
+                               [(30e-6 + 20e-6 * i, -10e-6 + 25e-6 * j, 6e-6) for i in range(3) for j in range(2)])
+    assert all(b.fixed for b in members) and not loaded.bodies[0].fixed
+    assert all(b.mesh is members[0].mesh for b in members)
+    assert loaded.model.solver.near_far_cutoff == 3e-5
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda a: a.update(count=[0, 2]), r"arrays.0.count\[0\]: 0 is outside the allowed range"),
+    (lambda a: a.update(count=4), r"arrays.0.count: expected \[nx, ny\]"),
+    (lambda a: a.update(position=[0.0, 0.0, 1e-5]), r"arrays.0: unknown key 'position'"),
+    (lambda a: a.pop("pitch"), r"arrays.0: missing required key 'pitch'"),
+    (lambda a: a.update(pitch=[5e-6, 25e-6]), r"initial placement: bodies 1 and 3 overlap"),
+])
+def test_bad_arrays_name_the_field(tmp_path, change, message):
+    array = json.loads(json.dumps(ARRAY))
+    change(array)
+    with pytest.raises(scene.SceneError, match=message):
+        scene.load(write(tmp_path, dict(BASE, arrays=[array])))
 
 
 @pytest.mark.parametrize("change, message", [

@@ -51,6 +51,10 @@ from .treecode import FarField, TreecodeOptions
 # the free cell's velocity then stays within 1e-3 of the full solve on an 8 x 8 array of domes
 # (benchmarks/frozen.py, README "Frozen adherent arrays")
 DEFAULT_CUTOFF = 40e-6
+# adherent elements from which the background flow is evaluated by the tree; below, the direct
+# sum over every element costs less than the tree's set-up (a 2 x 2 array's tree: 20 s; an 8 x 8
+# array of domes, 6144 elements: 0.05 s per evaluation at a free cell's 96 points)
+TREE_ELEMENTS = 8192
 # the tree covers the bodies at set-up with this many outer diameters of the largest body
 # around them along the wall, and one outer radius above the highest top (a taller tree has
 # wider leaves, more near field per point)
@@ -60,14 +64,17 @@ COVER_MARGIN = 2.0
 class BackgroundField:
     """u_bg = u_inf + w0 (SI): the shear flow past the adherent ``bodies`` alone, solved once by
     ``solver`` (a fresh MobilitySolver), then evaluated at any points outside them
-    (``velocity``). ``cover``: (k, 3) points (m) the evaluation tree must reach."""
+    (``velocity``). ``cover``: (k, 3) points (m) the evaluation tree must reach; the tree is
+    built from ``tree_elements`` elements on (below, every evaluation is the direct sum)."""
 
-    def __init__(self, solver: MobilitySolver, bodies, cover: np.ndarray, treecode: TreecodeOptions):
+    def __init__(self, solver: MobilitySolver, bodies, cover: np.ndarray, treecode: TreecodeOptions,
+                 tree_elements: int = TREE_ELEMENTS):
         solution = solver.solve(bodies)
         system, x, speed = solver.last_system
         geo = system.geometry
         self.force, self.torque = solution.force, solution.torque
         self.iterations = solution.iterations
+        self.warned = False  # of points beyond the tree
         self.shear_rate, self.length, self.speed = solver.shear_rate, geo.length_scale, speed
         # the double layer sees the non-rigid part of the density, the completions the loads
         # (CompletedDoubleLayer.matvec)
@@ -78,32 +85,36 @@ class BackgroundField:
         poles = all_completion_poles(geo)
         self.operator = DoubleLayerOperator(geo, solver.wall, solver.quadrature, solver.dtype, solver.device,
                                             "matrix_free", point_sources=poles)
+        self.far = self.values = None
+        if geo.n_elements < tree_elements:
+            return
         n_qp = geo.qp_positions.shape[1]
         self.far = FarField(self.operator.kernels, self.operator.device, geo.element_nodes[:, 8], geo.collocation,
                             np.arange(geo.n_points) // geo.points_per_element, geo.qp_positions.reshape(-1, 3),
                             np.repeat(np.arange(geo.n_elements), n_qp), poles, treecode,
                             cover=np.asarray(cover, dtype=float) / self.length)
         self.values = self.far.local_values(quadrature_strengths(geo, self.density), self.pole_forces)
-        self._warned = False
 
     def velocity(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) u_bg (m/s) at ``points`` (m) outside the adherent cells."""
         x = np.asarray(points, dtype=float).reshape(-1, 3) / self.length
-        inside = self.far.covers(x)
-        w = np.zeros_like(x)
         far, op = self.far, self.operator
-        if inside.any():
+        inside = far.covers(x) if far is not None else np.ones(len(x), dtype=bool)
+        w = np.zeros_like(x)
+        if far is None:
+            w = op.field_at(x, self.density, self.pole_forces)
+        elif inside.any():
             seg = far.segments_at(x[inside])
             group = far.group_of_target(seg)
             w[inside] = far.interpolate(self.values, seg) + op.field_at(
                 x[inside], self.density, self.pole_forces, (group, *far.near_lists(far.leaf_of_element, seg)),
                 (group, *far.near_lists(far.leaf_of_pole, seg)))
         if not inside.all():
-            if not self._warned:
+            if not self.warned:
                 warnings.warn("points outside the region the frozen array's tree covers (the bodies at set-up,"
                               f" {COVER_MARGIN:g} cell diameters around, a radius above): their background flow is"
                               " summed directly over every element, which is slower", stacklevel=2)
-                self._warned = True
+                self.warned = True
             w[~inside] = op.field_at(x[~inside], self.density, self.pole_forces)
         u = w * self.speed
         u[:, 0] += self.shear_rate * np.asarray(points, dtype=float).reshape(-1, 3)[:, 2]
@@ -116,15 +127,18 @@ class FrozenArraySolver:
     ``cutoff`` (m, between bounding spheres) of them solved in each call (module docstring).
 
     solver: a MobilitySolver with the settings of both solves (it solves the near systems; a
-    fresh copy solves the background); treecode: the options of the background flow's tree.
-    The fixed bodies must be the same in every call (set up at the first)."""
+    fresh copy solves the background); treecode: the options of the background flow's tree,
+    built from ``tree_elements`` adherent elements on (``BackgroundField``). The fixed bodies
+    must be the same in every call (set up at the first)."""
 
-    def __init__(self, solver: MobilitySolver, cutoff: float = DEFAULT_CUTOFF, treecode: TreecodeOptions | None = None):
+    def __init__(self, solver: MobilitySolver, cutoff: float = DEFAULT_CUTOFF, treecode: TreecodeOptions | None = None,
+                 tree_elements: int = TREE_ELEMENTS):
         if isinstance(cutoff, bool) or not np.isfinite(cutoff) or cutoff < 0:
             raise ValueError(f"cutoff must be a finite distance >= 0 (m), got {cutoff!r}")
         self.inner = solver
         self.cutoff = float(cutoff)
         self.treecode = treecode or solver.treecode
+        self.tree_elements = int(tree_elements)
         self.background_field: BackgroundField | None = None
         self._fixed_key = None
         self.near_bodies = np.zeros(0, dtype=int)  # the adherent cells solved in the last call
@@ -202,7 +216,7 @@ class FrozenArraySolver:
                           [high[0] + margin, high[1] + margin, high[2] + 2.0 * radius]])
         self._radii = np.array([outer_radius(bodies[i].mesh) for i in adherent])
         self.background_field = BackgroundField(self.inner.fresh(), [bodies[i] for i in adherent], cover,
-                                                self.treecode)
+                                                self.treecode, self.tree_elements)
         self._fixed_key = key
 
     def _near(self, bodies, free, adherent) -> np.ndarray:

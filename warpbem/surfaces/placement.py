@@ -4,6 +4,7 @@ its own body, no body touching or crossing the wall, no two bodies overlapping."
 from __future__ import annotations
 
 import numpy as np
+import scipy.spatial
 
 from . import quad9
 
@@ -80,11 +81,12 @@ def check_placement(bodies, wall: bool) -> None:
                 f"body {i} touches or crosses the wall z = 0: its lowest point is at"
                 f" z = {lowest:.4g} m (centre at z = {body.position[2]:.4g} m)"
             )
-    radii = [np.linalg.norm(s - b.position, axis=1).max() for s, b in zip(samples, bodies)]
-    for i in range(len(bodies)):
-        for j in range(i + 1, len(bodies)):
-            if np.linalg.norm(bodies[i].position - bodies[j].position) > radii[i] + radii[j]:
-                continue
+    radii = np.array([np.linalg.norm(s - b.position, axis=1).max() for s, b in zip(samples, bodies)])
+    centres = np.array([b.position for b in bodies])
+    # pairs whose bounding spheres meet, by a k-d tree: all pairs took seconds for 1000 cells
+    candidates = scipy.spatial.cKDTree(centres).query_pairs(2.0 * radii.max(), output_type="ndarray")
+    for i, j in sorted(map(tuple, candidates)):
+        if np.linalg.norm(centres[i] - centres[j]) <= radii[i] + radii[j]:
             nodes_i, nodes_j = (b.world_nodes()[b.mesh.elements] for b in (bodies[i], bodies[j]))
             depth = min(signed_distance(samples[j], nodes_i).min(), signed_distance(samples[i], nodes_j).min())
             if depth <= 0.0:
