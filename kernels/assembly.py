@@ -59,6 +59,8 @@ from .greens import make_green_functions
 
 
 DENSITY_ORDERS = (1, 2, 3)
+MATVEC_CHUNK = 256  # matrix entries a thread block of ``dense_matvec`` reads at once
+MATVEC_BLOCK = 64  # its threads
 KINDS = ("double_layer", "adjoint_double_layer", "single_layer", "inverse_distance", "elastic_rotation",
          "elastic_dyadic")
 
@@ -507,13 +509,20 @@ def build_kernels(dtype, wall: bool, kind: str = "double_layer", density_order: 
                 matrix[3 * a + j, 3 * a + i] = blocks[a][j, i]
 
     @wp.kernel(enable_backward=False, module="unique")
-    def dense_matvec(matrix: wp.array2d(dtype=dtype), x: wp.array(dtype=dtype), out: wp.array(dtype=dtype)):
-        """out = matrix @ x, one row per thread (used on CUDA; NumPy BLAS is faster on CPU)."""
+    def dense_matvec(entries: wp.array(dtype=dtype), n: int, x: wp.array(dtype=dtype), out: wp.array(dtype=dtype)):
+        """out = A x for the n x n row-major matrix A stored flat in ``entries`` (launch_tiled, one
+        thread block per row, ``MATVEC_BLOCK`` threads): the block's threads read consecutive
+        entries of its row, MATVEC_CHUNK at a time, so a GPU's loads coalesce (one thread per
+        row read entries a whole row apart). Past a row's end the chunk reads the next row's
+        entries against x's zero padding (tile_load reads zero past an array's end). Used on
+        CUDA; NumPy BLAS is faster on the CPU."""
         row = wp.tid()
-        acc = dtype(0.0)
-        for col in range(x.shape[0]):
-            acc += matrix[row, col] * x[col]
-        out[row] = acc
+        acc = wp.tile_zeros(shape=1, dtype=dtype)
+        for k in range(0, n, MATVEC_CHUNK):
+            a = wp.tile_load(entries, shape=MATVEC_CHUNK, offset=row * n + k)
+            b = wp.tile_load(x, shape=MATVEC_CHUNK, offset=k)
+            acc += wp.tile_dot(a, b)
+        wp.tile_store(out, acc, offset=row)
 
     return SimpleNamespace(
         green=g,

@@ -110,7 +110,7 @@ def test_all_kernels_compile_for_cuda():
         for wall in (False, True):
             k = build_kernels(dtype, wall)
             for kernel in (k.assemble_entries, k.gather_entries, k.apply_matrix_free, k.same_body_row_sums,
-                           k.point_force_velocity, k.proxy_interactions, k.dense_matvec, k.identity_self_blocks,
+                           k.point_force_velocity, k.proxy_interactions, k.dense_matvec, k.identity_self_blocks, k.field_at_points,
                            k.write_self_blocks,
                            build_contact_kernels(dtype).closest_points):
                 with tempfile.TemporaryDirectory() as out:

@@ -146,3 +146,17 @@ def test_self_blocks_written_on_the_device_equal_the_host_ones(kind, density_ord
     device._device_self_blocks(matrix, range(len(geometry.body_ranges)))
     assert np.abs(expected[diagonal]).max() > 0.1
     np.testing.assert_allclose(values, expected, rtol=0, atol=1e-13 * np.abs(expected).max())
+
+
+@pytest.mark.parametrize("dtype", ["float64", "float32"])
+def test_the_gpu_dense_product_kernel_matches_blas(rng, dtype):
+    """``dense_matvec``, the product CUDA uses (one thread block per row, chunks of 256 entries,
+    kernels/assembly.py), run on the CPU against NumPy's BLAS on the same matrix; a row length
+    that is not a multiple of the chunk exercises the padded last chunk."""
+    geometry = SurfaceGeometry.from_bodies(two_spheres_near_wall(), 2, 1.0, True)
+    op = DoubleLayerOperator(geometry, True, QuadratureOptions(), dtype, "cpu", "dense")
+    assert op.size % 256 != 0
+    q = rng.standard_normal(op.size)
+    blas = op.matvec(q)
+    np.testing.assert_allclose(op.device_matvec(q).numpy(), blas, rtol=0,
+                               atol=(1e-12 if dtype == "float64" else 1e-4) * np.abs(blas).max())

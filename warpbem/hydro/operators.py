@@ -349,11 +349,23 @@ class DoubleLayerOperator:
             matrix = self.assemble()
             if self.device.is_cpu:
                 return np.asarray(matrix.numpy() @ density, dtype=np.float64)
-            x = wp.array(density, dtype=self.kernels.green.dtype, device=self.device)
-            out = wp.zeros(self.size, dtype=self.kernels.green.dtype, device=self.device)
-            wp.launch(self.kernels.dense_matvec, dim=self.size, inputs=[matrix, x, out], device=self.device)
-            return out.numpy().astype(np.float64)
+            return self.device_matvec(density).numpy().astype(np.float64)
         return self._listed_sum(density) if self.mode == "matrix_free" else self._treecode_matvec(density, pole_forces)
+
+    def device_matvec(self, density):
+        """The assembled matrix times ``density`` by the Warp kernel ``dense_matvec`` where the
+        matrix lives (a device array; one thread block per row), the product on CUDA; on the CPU
+        it checks the kernel against BLAS (tests)."""
+        from ..kernels.assembly import MATVEC_BLOCK
+
+        wp = self._wp
+        self.assemble()
+        entries = self._buffer[: self.size**2]  # the matrix, flat (row-major, no gaps)
+        x = wp.array(np.asarray(density, dtype=self.np_dtype), dtype=self.kernels.green.dtype, device=self.device)
+        out = wp.zeros(self.size, dtype=self.kernels.green.dtype, device=self.device)
+        wp.launch_tiled(self.kernels.dense_matvec, dim=[self.size], inputs=[entries, self.size, x, out],
+                        block_dim=MATVEC_BLOCK, device=self.device)
+        return out
 
     def _device_lists(self, name: str, group, starts, items):
         """Device copies of one group/CSR list triple (``apply_matrix_free``), made once."""
