@@ -14,10 +14,16 @@ peak memory): set-up (the first frame: the background solve), and the time per s
 (the same neighbourhood from 8 x 8 on; the 3 x 3 array's is its edge). --full also runs the
 arrays up to --full-max without the split (every body in every solve).
 
-    python benchmarks/frozen.py errors [--side 8] [--cutoffs ...] [--positions ...]
+suspension: scenes/sedimenting_over_array.toml (64 free cells over 16 x 16 domes): the free
+cells' velocities by the split at --suspension-cutoffs against the full solve (the treecode) at
+the start, then the scene's set-up, time per step (k = --steps) and memory.
+
+    python benchmarks/frozen.py errors [--side 8] [--cutoffs ...] [--positions ...] [--replot]
     python benchmarks/frozen.py steps [--counts 3 8 32] [--steps 5] [--full] [--full-max 8]
+    python benchmarks/frozen.py suspension [--suspension-cutoffs 0 10e-6 40e-6] [--steps 1]
 """
 
+import csv
 import json
 import resource
 import subprocess
@@ -32,7 +38,9 @@ from common import arguments, output, print_table, pyplot, save_chart, write_csv
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "array_crossing.toml"
+SUSPENSION = "sedimenting_over_array.toml"
 PITCH = 30e-6
+DEFAULT_CUTOFF_UM = 40.0  # warpbem.hydro.frozen.DEFAULT_CUTOFF, charted
 
 
 def row_offset(n: int) -> float:
@@ -94,26 +102,37 @@ def errors(args):
                        "angular_error_max": "{:.2e}", "split_s_median": "{:.3f}", "full_s_median": "{:.2f}"})
     write_csv(f"frozen_errors_{args.side}x{args.side}.csv", raw)
     write_csv(f"frozen_errors_{args.side}x{args.side}_summary.csv", rows)
+    plot_errors(rows, args.side, len(args.positions))
+
+
+def plot_errors(rows, side, n_positions):
+    """Left: the largest error over the positions against the cut-off (a cut-off past the array,
+    every cell near, drawn as a line); right: error against the time per solve."""
     plt = pyplot()
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
-    cut = [r["cutoff_um"] for r in rows]
-    floor = 1e-9  # the split's own error with every cell near is GMRES's; chart it at a floor
-    left.semilogy(cut, [max(r["velocity_error_max"], floor) for r in rows], "o-", label="velocity U")
-    left.semilogy(cut, [max(r["angular_error_max"], floor) for r in rows], "s--", label="angular velocity")
-    left.axhline(1e-3, color="k", lw=0.8, ls=":", label="1e-3 (the default's bound)")
+    finite = [r for r in rows if r["cutoff_um"] < 1e5]
+    every = [r for r in rows if r["cutoff_um"] >= 1e5]
+    cut = [r["cutoff_um"] for r in finite]
+    left.semilogy(cut, [r["velocity_error_max"] for r in finite], "o-", label="velocity U")
+    left.semilogy(cut, [r["angular_error_max"] for r in finite], "s--", label="angular velocity")
+    for r in every:
+        left.axhline(r["velocity_error_max"], color="C2", lw=0.8, label="every cell near (GMRES tolerance)")
+    left.axhline(1e-3, color="k", lw=0.8, ls=":", label="1e-3")
+    left.axvline(DEFAULT_CUTOFF_UM, color="C3", lw=0.8, ls="--", label=f"default {DEFAULT_CUTOFF_UM:g} um")
     left.set_xlabel("cut-off between bounding spheres [um]")
-    left.set_ylabel(f"largest relative error over {len(args.positions)} positions")
-    left.set_title(f"near-far split against the full solve, {args.side} x {args.side} domes")
-    right.loglog([r["split_s_median"] for r in rows], [max(r["velocity_error_max"], floor) for r in rows], "o-",
-                 label="split (cut-offs)")
+    left.set_ylabel(f"largest relative error over {n_positions} positions")
+    left.set_title(f"near-far split against the full solve, {side} x {side} domes")
+    right.loglog([r["split_s_median"] for r in rows], [r["velocity_error_max"] for r in rows], "o-",
+                 label="split (cut-off in um)")
     for r in rows:
-        right.annotate(f"{r['cutoff_um']:.0f}", (r["split_s_median"], max(r["velocity_error_max"], floor)),
-                       fontsize=7, xytext=(3, 3), textcoords="offset points")
+        label = "all" if r["cutoff_um"] >= 1e5 else f"{r['cutoff_um']:.0f}"
+        right.annotate(label, (r["split_s_median"], r["velocity_error_max"]), fontsize=7, xytext=(3, 3),
+                       textcoords="offset points")
     right.axvline(rows[0]["full_s_median"], color="C3", label="full solve (kept blocks)")
     right.set_xlabel("time per solve [s] (median over positions)")
     right.set_ylabel("largest relative error of U")
     right.set_title("accuracy against cost")
-    print(save_chart(fig, output(f"frozen_errors_{args.side}x{args.side}.png"), (left, right), legend_size=8))
+    print(save_chart(fig, output(f"frozen_errors_{side}x{side}.png"), (left, right), legend_size=8))
 
 
 def rel(a, b):
@@ -127,14 +146,13 @@ def SolverOptionsWithout(options):
     return replace(options, near_far_cutoff=None)
 
 
-def step_case(n: int, steps: int, split: bool, device: str) -> dict:
-    """One crossing case in this process: set-up, time per step, peak memory."""
+def step_case(scene: str, overrides: list, steps: int, split: bool, device: str) -> dict:
+    """One run in this process: set-up (the first frame), time per step as (T(2k) - T(k)) / k,
+    peak memory."""
     from warpbem.app import scene as scenes
     from warpbem.dynamics import Simulator
 
-    x = PITCH * ((n - 1) // 2) + 0.5 * PITCH
-    overrides = crossing_overrides(n, x)
-    loaded = scenes.load(SCENE, overrides)
+    loaded = scenes.load(ROOT / "scenes" / scene, overrides)
     model = loaded.model
     if not split:
         from dataclasses import replace
@@ -152,42 +170,98 @@ def step_case(n: int, steps: int, split: bool, device: str) -> dict:
             state, frame = sim.step(state)
             marks.append(time.perf_counter() - t0)
     per_step = (marks[2 * steps - 1] - marks[steps - 1]) / steps
-    return dict(array=f"{n}x{n}", domes=n * n, elements=96 * (n * n + 1), split=split, setup_s=setup,
-                step_s=per_step, first_steps_s=marks[steps - 1] - setup, near=int(len(getattr(sim.solver, "near_bodies", []))),
-                operator=sim.solver.operator, peak_gb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6,
-                x_um=float(state.positions[0, 0] * 1e6))
+    return dict(bodies=model.n_bodies, domes=int(model.fixed_mask.sum()),
+                elements=int(sum(len(m.elements) for m in model.meshes)), split=split, setup_s=setup,
+                step_s=per_step, first_steps_s=marks[steps - 1] - setup,
+                near=int(len(getattr(sim.solver, "near_bodies", []))), operator=sim.solver.operator,
+                peak_gb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6)
+
+
+def run_case(scene: str, overrides: list, steps: int, split: bool, device: str) -> dict:
+    """``step_case`` in a process of its own (its own peak memory)."""
+    command = [sys.executable, __file__, "case", scene, json.dumps(overrides), str(steps),
+               "split" if split else "full", "--device", device]
+    done = subprocess.run(command, capture_output=True, text=True, cwd=Path(__file__).parent)
+    if done.returncode:
+        print(done.stderr[-3000:], file=sys.stderr)
+        raise SystemExit(f"{scene} {overrides} failed")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+STEP_FORMATS = {"setup_s": "{:.1f}", "step_s": "{:.3f}", "first_steps_s": "{:.2f}", "peak_gb": "{:.2f}",
+                "step_over_smallest": "{:.2f}"}
 
 
 def steps(args):
     rows = []
     cases = [(n, True) for n in args.counts] + [(n, False) for n in args.counts if args.full and n <= args.full_max]
     for n, split in cases:
-        command = [sys.executable, __file__, "case", str(n), str(args.steps), "split" if split else "full",
-                   "--device", args.device]
-        done = subprocess.run(command, capture_output=True, text=True, cwd=Path(__file__).parent)
-        if done.returncode:
-            print(done.stderr[-3000:], file=sys.stderr)
-            raise SystemExit(f"case {n} x {n} failed")
-        rows.append(json.loads(done.stdout.strip().splitlines()[-1]))
-        print_table(rows[-1:], {"setup_s": "{:.1f}", "step_s": "{:.3f}", "first_steps_s": "{:.2f}",
-                                "peak_gb": "{:.2f}", "x_um": "{:.1f}"})
+        # mid-array, between two columns: the same neighbourhood from 8 x 8 on
+        row = run_case(SCENE.name, crossing_overrides(n, PITCH * ((n - 1) // 2) + 0.5 * PITCH), args.steps, split,
+                       args.device)
+        rows.append(dict(array=f"{n}x{n}", **row))
+        print_table(rows[-1:], STEP_FORMATS)
     smallest = next(r for r in rows if r["split"] and r["domes"] == min(args.counts) ** 2)
     for r in rows:
         r["step_over_smallest"] = r["step_s"] / smallest["step_s"]
     print()
-    print_table(rows, {"setup_s": "{:.1f}", "step_s": "{:.3f}", "first_steps_s": "{:.2f}", "peak_gb": "{:.2f}",
-                       "x_um": "{:.1f}", "step_over_smallest": "{:.2f}"})
+    print_table(rows, STEP_FORMATS)
     write_csv("frozen_steps.csv", rows)
 
 
+def suspension(args):
+    """The 64 free cells over 16 x 16 domes: each free cell's velocity by the split at each of
+    --suspension-cutoffs against the full solve (treecode) at the start; then the scene's time
+    per step, set-up and memory with its own cut-off."""
+    import warpbem as wb
+    from warpbem.app import scene as scenes
+    from warpbem.hydro.frozen import FrozenArraySolver
+
+    loaded = scenes.load(ROOT / "scenes" / SUSPENSION)
+    model, bodies = loaded.model, loaded.initial_bodies()
+    weight = model.interaction("gravity").force
+    free = ~model.fixed_mask
+    rows = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", wb.ContactResolutionWarning)
+        full = SolverOptionsWithout(model.solver).build(model.flow, args.device)
+        t = time.perf_counter()
+        exact = full.solve(bodies, forces=weight)
+        rows.append(dict(solve="full", cutoff_um=float("nan"), near=int(model.fixed_mask.sum()),
+                         time_s=time.perf_counter() - t, iterations=exact.iterations, operator=exact.operator_mode,
+                         velocity_error_max=0.0, angular_error_max=0.0))
+        print_table(rows[-1:])
+        del full
+        for cutoff in args.suspension_cutoffs:
+            split = FrozenArraySolver(SolverOptionsWithout(model.solver).build(model.flow, args.device), cutoff)
+            t = time.perf_counter()
+            split.solve(bodies, forces=weight)  # the background set up, and the first solve
+            first = time.perf_counter() - t
+            t = time.perf_counter()
+            sol = split.solve(bodies, forces=weight)  # the same bodies again: the near system kept
+            rows.append(dict(solve=f"split (set-up + first {first:.0f} s)", cutoff_um=cutoff * 1e6,
+                             near=len(split.near_bodies), time_s=time.perf_counter() - t, iterations=sol.iterations,
+                             operator=sol.operator_mode,
+                             velocity_error_max=max(rel(sol.velocity[i], exact.velocity[i]) for i in np.flatnonzero(free)),
+                             angular_error_max=max(rel(sol.angular_velocity[i], exact.angular_velocity[i])
+                                                   for i in np.flatnonzero(free))))
+            print_table(rows[-1:])
+    print()
+    print_table(rows, {"velocity_error_max": "{:.2e}", "angular_error_max": "{:.2e}", "time_s": "{:.1f}"})
+    write_csv("frozen_suspension.csv", rows)
+    run = run_case(SUSPENSION, [], args.steps, True, args.device)
+    print_table([run], STEP_FORMATS)
+    write_csv("frozen_suspension_steps.csv", [run])
+
+
 def main():
-    if len(sys.argv) > 1 and sys.argv[1] == "case":  # a child process of ``steps``
-        n, k, mode = int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
+    if len(sys.argv) > 1 and sys.argv[1] == "case":  # a child process of ``run_case``
+        scene, overrides, k, mode = sys.argv[2], json.loads(sys.argv[3]), int(sys.argv[4]), sys.argv[5]
         device = sys.argv[sys.argv.index("--device") + 1] if "--device" in sys.argv else "cpu"
-        print(json.dumps(step_case(n, k, mode == "split", device)))
+        print(json.dumps(step_case(scene, overrides, k, mode == "split", device)))
         return
     parser = arguments(__doc__)
-    parser.add_argument("what", choices=["errors", "steps"])
+    parser.add_argument("what", choices=["errors", "steps", "suspension"])
     parser.add_argument("--side", type=int, default=8)
     parser.add_argument("--cutoffs", type=float, nargs="+",
                         default=[0.0, 5e-6, 10e-6, 15e-6, 20e-6, 30e-6, 40e-6, 60e-6, 90e-6, 150e-6, 1.0])
@@ -197,8 +271,15 @@ def main():
     parser.add_argument("--steps", type=int, default=5)
     parser.add_argument("--full", action="store_true", help="also without the split, up to --full-max")
     parser.add_argument("--full-max", type=int, default=8)
+    parser.add_argument("--suspension-cutoffs", type=float, nargs="+", default=[0.0, 10e-6, 40e-6])
+    parser.add_argument("--replot", action="store_true", help="errors: chart the last run's CSV again")
     args = parser.parse_args()
-    errors(args) if args.what == "errors" else steps(args)
+    if args.what == "errors" and args.replot:
+        with output(f"frozen_errors_{args.side}x{args.side}_summary.csv").open() as f:
+            rows = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
+        plot_errors(rows, args.side, len(args.positions))
+    else:
+        {"errors": errors, "steps": steps, "suspension": suspension}[args.what](args)
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@ State, the step) -> ``app`` (scene files, runs, sweeps, output, command line).""
 
 from . import units
 from .elastic.deformable import DeformationError, DeformationWarning
+from .hydro.frozen import FrozenArraySolver
 from .hydro.linalg import ConvergenceError
 from .hydro.mobility import ContactResolutionWarning, MobilitySolution, MobilitySolver, solve_mobility
 from .hydro.traction import TractionSolution, solve_traction
@@ -17,6 +18,7 @@ from .surfaces.mesh import MeshError
 from .surfaces.placement import PlacementError
 
 __version__ = "0.1.0"
-__all__ = ["mesh", "units", "Body", "solve_mobility", "MobilitySolver", "MobilitySolution", "solve_traction",
+__all__ = ["mesh", "units", "Body", "solve_mobility", "MobilitySolver", "FrozenArraySolver", "MobilitySolution",
+           "solve_traction",
            "TractionSolution", "TreecodeOptions", "ConvergenceError", "DeformationError", "DeformationWarning",
            "MeshError", "PlacementError", "ContactResolutionWarning", "__version__"]

@@ -17,11 +17,13 @@ solves the free cells and the near adherent cells only, an ordinary ``MobilitySo
 (meshes refined near contact as usual) whose undisturbed flow is u_bg on the free cells and
 zero on the adherent ones.
 
-What it leaves out: a free cell's disturbance at distance r decays as r^-2 (its stresslet, or
-the wall-parallel Stokeslet with its Blake image), a far cell's answer comes back as another
-r^-2, and the far cells fill the plane of the array, so the error falls as about R^-2 with the
-cut-off R. ``benchmarks/frozen.py`` charts it against the full solve on an 8 x 8 array (README
-"Frozen adherent arrays"); ``DEFAULT_CUTOFF`` is taken from that chart.
+What it leaves out: the far cells' answer to the free cell's disturbance, and the free cell's
+to theirs. Above the wall both decay fast (a wall-parallel Stokeslet at height h is felt as
+h z / r^3 along the wall, Blake 1971; a force-free cell's stresslet faster), and on an 8 x 8
+array of domes the largest error of the free cell's velocity over nine positions of its
+crossing fell from 8.5e-3 with no cell near to 3.5e-4 at a cut-off of 30 um, 1.2e-4 at 40 um,
+5e-6 at 90 um and 3.4e-7 at 150 um, about as R^-4 (``benchmarks/frozen.py``, README "Frozen
+adherent arrays"). ``DEFAULT_CUTOFF`` is 40 um, eight times inside 1e-3 there.
 
 The background flow at the free cells' points comes from the solved density through the
 treecode (``treecode.py``): the far field of the whole array at every leaf's Chebyshev points is
@@ -48,8 +50,8 @@ from .operators import DoubleLayerOperator, quadrature_strengths
 from .treecode import FarField, TreecodeOptions
 
 # m: adherent cells within this gap (between bounding spheres) of a free cell are solved with it;
-# the free cell's velocity then stays within 1e-3 of the full solve on an 8 x 8 array of domes
-# (benchmarks/frozen.py, README "Frozen adherent arrays")
+# the free cell's velocity then stays within 1.2e-4 of the full solve on an 8 x 8 array of domes
+# (benchmarks/frozen.py, README "Frozen adherent arrays"; 30 um: 3.5e-4, 20 um: 2e-3)
 DEFAULT_CUTOFF = 40e-6
 # adherent elements from which the background flow is evaluated by the tree; below, the direct
 # sum over every element costs less than the tree's set-up (a 2 x 2 array's tree: 20 s; an 8 x 8
