@@ -51,3 +51,25 @@ def test_run_chart_has_side_and_top_views_to_scale(tmp_path):
         with h5py.File(tmp_path / "other.h5", "w") as f:
             f["x"] = [1.0]
         plotting.plot(tmp_path / "other.h5")
+
+
+def test_a_crowded_run_groups_its_cells_in_the_legend(tmp_path):
+    """An array of 16 held cells and one moving: the side view's legend names the moving cell
+    and the 16 fixed ones in one entry each (not 17 entries), every cell still drawn, and the
+    fixed cells' constant heights left out of Z(t)."""
+    table = json.loads(json.dumps(BASE))
+    table["flow"]["shear_rate"] = 5.0
+    table["bodies"][0]["position"] = [-15e-6, 0.0, 20e-6]
+    table["arrays"] = [{"count": [4, 4], "pitch": [15e-6, 15e-6], "origin": [0.0, 0.0, 8e-6], "fixed": True,
+                        "mesh": {"shape": "sphere", "radius": 5e-6, "subdivisions": 2}}]
+    table["time"].update(end=0.2, dt_max=0.1)
+    table["solver"] = {"contact_refinement": 0.0}
+    out = tmp_path / "array.h5"
+    run.run(write(tmp_path, table), out, progress=lambda line: None)
+    fig = plotting.run_figure(out)
+    height, lateral, side, top = fig.axes[:4]
+    labels = [label for label in side.get_legend_handles_labels()[1]]
+    assert labels == ["1 moving cells, outlines at t = 0, 0.1, 0.2 s", "16 fixed cells"]
+    outlines = [line for line in top.get_lines() if len(line.get_xdata()) > 5]
+    assert len(outlines) == 3 + 16  # the moving cell at 3 frames, each held cell once
+    assert len(height.get_lines()) == 1

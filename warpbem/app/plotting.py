@@ -84,6 +84,9 @@ def plot_run(h5_path, png_path=None) -> Path:
     return png_path
 
 
+CROWDED = 12  # bodies beyond which a chart groups them in its legend
+
+
 def run_figure(h5_path):
     """Trajectories of a run, like the thesis figures: height Z(t) and lateral position Y(t) of
     every body (with the closest gap), and the side (X-Z) and top (X-Y) views with the cells
@@ -106,14 +109,22 @@ def run_figure(h5_path):
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     um = 1e6
     snapshots = snapshot_frames(t)
+    # many bodies (arrays of cells): one colour and one legend entry for the fixed ones, one
+    # for the moving ones, and no lines of the fixed ones' constant heights
+    crowded = len(names) > CROWDED
+    first_moving, first_fixed = (np.flatnonzero(moved)[:1], np.flatnonzero(~moved)[:1])
     for i, name in enumerate(names):
-        colour = colours[i % len(colours)]
+        colour = "0.45" if crowded and not moved[i] else colours[i % len(colours)]
         style = "-" if moved[i] else ":"
-        height.plot(t, pos[:, i, 2] * um, style, color=colour, label=name)
-        lateral.plot(t, pos[:, i, 1] * um, style, color=colour, label=name)
+        if moved[i] or not crowded:
+            label = name if not crowded else f"{moved.sum()} moving cells" if i in first_moving else None
+            height.plot(t, pos[:, i, 2] * um, style, color=colour, label=label)
+            lateral.plot(t, pos[:, i, 1] * um, style, color=colour, label=label)
         frames = snapshots if moved[i] else snapshots[:1]
-        label = (f"{name}, outlines at t = " + ", ".join(f"{t[j]:.3g}" for j in frames) + " s") if moved[i] \
-            else f"{name} (fixed)"
+        times = ", ".join(f"{t[j]:.3g}" for j in frames)
+        label = (f"{name}, outlines at t = {times} s" if moved[i] else f"{name} (fixed)") if not crowded else \
+            f"{moved.sum()} moving cells, outlines at t = {times} s" if i in first_moving else \
+            f"{(~moved).sum()} fixed cells" if i in first_fixed else None
         for k, frame in enumerate(frames):
             shape = None if displacement is None else displacement[frame, i : i + 1]
             nodes = world_nodes(meshes[i : i + 1], pos[frame, i : i + 1], orientations[frame, i : i + 1], shape) * um

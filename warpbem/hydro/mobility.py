@@ -521,7 +521,6 @@ class MobilitySolver:
                                 result.residual, result.converged, double_layer.mode, x,
                                 double_layer.reused_bodies)
 
-
     def fresh(self) -> "MobilitySolver":
         """A solver with these settings and nothing of this one's solves (no kept system, no
         warnings given, "auto" operator not yet decided)."""
