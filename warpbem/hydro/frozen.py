@@ -30,8 +30,8 @@ treecode (``treecode.py``): the far field of the whole array at every leaf's Che
 computed once (``FarField.local_values``), and each evaluation interpolates it in the leaf of
 the point and adds the leaf's own and 8 neighbours' elements and poles by the exact (adaptive)
 element integrals (``DoubleLayerOperator.field_at``). The tree covers the region of the bodies
-at set-up with a margin; points beyond it (a free cell that left) are summed directly over
-every element, slower, with a warning.
+at set-up with a margin (``COVER_SHARE``); points beyond it (a free cell that left) are summed
+directly over every element, slower, with a warning.
 
 Loads: a near adherent cell's load is its background load plus its answer; a far one keeps its
 background load (its answer dropped); in solves of loads alone (``background=False``) far cells
@@ -57,10 +57,13 @@ DEFAULT_CUTOFF = 40e-6
 # sum over every element costs less than the tree's set-up (a 2 x 2 array's tree: 20 s; an 8 x 8
 # array of domes, 6144 elements: 0.05 s per evaluation at a free cell's 96 points)
 TREE_ELEMENTS = 8192
-# the tree covers the bodies at set-up with this many outer diameters of the largest body
-# around them along the wall, and one outer radius above the highest top (a taller tree has
-# wider leaves, more near field per point)
-COVER_MARGIN = 2.0
+# the tree covers the bodies at set-up and, along the wall, this share of their extent (at least
+# COVER_DIAMETERS outer diameters of the largest body) around them, and one outer radius above
+# the highest top (a taller tree has wider leaves, more near field per point). Points beyond
+# are summed directly: a free cell that left the 32 x 32 array's first cover (two diameters)
+# stepped in 30 s instead of 1.5 s; a wider cover costs a few seconds at set-up
+COVER_SHARE = 0.25
+COVER_DIAMETERS = 2.0
 
 
 class BackgroundField:
@@ -113,8 +116,8 @@ class BackgroundField:
                 (group, *far.near_lists(far.leaf_of_pole, seg)))
         if not inside.all():
             if not self.warned:
-                warnings.warn("points outside the region the frozen array's tree covers (the bodies at set-up,"
-                              f" {COVER_MARGIN:g} cell diameters around, a radius above): their background flow is"
+                warnings.warn("points outside the region the frozen array's tree covers (the bodies at set-up and"
+                              f" {COVER_SHARE:g} of their extent around, a radius above): their background flow is"
                               " summed directly over every element, which is slower", stacklevel=2)
                 self.warned = True
             w[~inside] = op.field_at(x[~inside], self.density, self.pole_forces)
@@ -213,7 +216,7 @@ class FrozenArraySolver:
         radius = max(outer_radius(b.mesh) for b in bodies)
         centres = np.array([b.position for b in bodies])
         low, high = centres.min(axis=0), centres.max(axis=0)
-        margin = 2.0 * COVER_MARGIN * radius
+        margin = max(COVER_SHARE * float(np.ptp(centres[:, :2], axis=0).max()), 2.0 * COVER_DIAMETERS * radius)
         cover = np.array([[low[0] - margin, low[1] - margin, 0.0],
                           [high[0] + margin, high[1] + margin, high[2] + 2.0 * radius]])
         self._radii = np.array([outer_radius(bodies[i].mesh) for i in adherent])
