@@ -31,6 +31,7 @@ import subprocess
 import sys
 import time
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -41,7 +42,6 @@ ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "array_crossing.toml"
 SUSPENSION = "sedimenting_over_array.toml"
 PITCH = 30e-6
-DEFAULT_CUTOFF_UM = 40.0  # warpbem.hydro.frozen.DEFAULT_CUTOFF, charted
 
 
 def row_offset(n: int) -> float:
@@ -49,12 +49,10 @@ def row_offset(n: int) -> float:
     return -0.5 * PITCH - PITCH * ((n - 1) // 2)
 
 
-def crossing_overrides(n: int, x: float | None = None, cutoff: float | None = None) -> list:
+def crossing_overrides(n: int, x: float | None = None) -> list:
     out = [f"arrays.0.count=[{n},{n}]", f"arrays.0.origin=[0,{row_offset(n)!r},4.5e-6]"]
     if x is not None:
         out.append(f"bodies.0.position=[{x!r},0.0,6e-6]")
-    if cutoff is not None:
-        out.append(f"solver.near_far_cutoff={cutoff!r}")
     return out
 
 
@@ -72,8 +70,8 @@ def errors(args):
     free_mesh = loaded.bodies[0].mesh
     weight = np.zeros((len(fixed_bodies) + 1, 3))
     weight[0] = gravity.force[0]
-    full = SolverOptionsWithout(options).build(flow, args.device)
-    split = FrozenArraySolver(SolverOptionsWithout(options).build(flow, args.device), cutoff=0.0)
+    full = without_split(options).build(flow, args.device)
+    split = FrozenArraySolver(without_split(options).build(flow, args.device), cutoff=0.0)
     rows, raw = [], []
     for x in args.positions:
         bodies = [wb.Body(free_mesh, position=(x, 0.0, 6e-6))] + fixed_bodies
@@ -109,6 +107,9 @@ def errors(args):
 def plot_errors(rows, side, n_positions):
     """Left: the largest error over the positions against the cut-off (a cut-off past the array,
     every cell near, drawn as a line); right: error against the time per solve."""
+    from warpbem.hydro.frozen import DEFAULT_CUTOFF
+
+    default_um = DEFAULT_CUTOFF * 1e6
     plt = pyplot()
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
     finite = [r for r in rows if r["cutoff_um"] < 1e5]
@@ -119,7 +120,7 @@ def plot_errors(rows, side, n_positions):
     for r in every:
         left.axhline(r["velocity_error_max"], color="C2", lw=0.8, label="every cell near (GMRES tolerance)")
     left.axhline(1e-3, color="k", lw=0.8, ls=":", label="1e-3")
-    left.axvline(DEFAULT_CUTOFF_UM, color="C3", lw=0.8, ls="--", label=f"default {DEFAULT_CUTOFF_UM:g} um")
+    left.axvline(default_um, color="C3", lw=0.8, ls="--", label=f"default {default_um:g} um")
     left.set_xlabel("cut-off between bounding spheres [um]")
     left.set_ylabel(f"largest relative error over {n_positions} positions")
     left.set_title(f"near-far split against the full solve, {side} x {side} domes")
@@ -140,10 +141,8 @@ def rel(a, b):
     return float(np.linalg.norm(a - b) / np.linalg.norm(b))
 
 
-def SolverOptionsWithout(options):
+def without_split(options):
     """The scene's solver options without the split (the full solve, and the split's inner)."""
-    from dataclasses import replace
-
     return replace(options, near_far_cutoff=None)
 
 
@@ -156,9 +155,7 @@ def step_case(scene: str, overrides: list, steps: int, split: bool, device: str)
     loaded = scenes.load(ROOT / "scenes" / scene, overrides)
     model = loaded.model
     if not split:
-        from dataclasses import replace
-
-        model = replace(model, solver=SolverOptionsWithout(model.solver))
+        model = replace(model, solver=without_split(model.solver))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         t0 = time.perf_counter()
@@ -225,7 +222,7 @@ def suspension(args):
     rows = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", wb.ContactResolutionWarning)
-        full = SolverOptionsWithout(model.solver).build(model.flow, args.device)
+        full = without_split(model.solver).build(model.flow, args.device)
         t = time.perf_counter()
         exact = full.solve(bodies, forces=weight)
         rows.append(dict(solve="full", cutoff_um=float("nan"), near=int(model.fixed_mask.sum()),
@@ -234,7 +231,7 @@ def suspension(args):
         print_table(rows[-1:])
         del full
         for cutoff in args.suspension_cutoffs:
-            split = FrozenArraySolver(SolverOptionsWithout(model.solver).build(model.flow, args.device), cutoff)
+            split = FrozenArraySolver(without_split(model.solver).build(model.flow, args.device), cutoff)
             t = time.perf_counter()
             split.solve(bodies, forces=weight)  # the background set up, and the first solve
             first = time.perf_counter() - t

@@ -239,7 +239,8 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
     for i, spec in enumerate(_entries("bodies", table.get("bodies", []))):
         where = f"bodies.{i}"
         _table(where, spec, BODY_KEYS, ("mesh", "position"))
-        bodies.append(_body(where, spec, _mesh(f"{where}.mesh", spec["mesh"], folder)))
+        mesh = _mesh(f"{where}.mesh", spec["mesh"], folder)
+        bodies.append(_body(where, spec, mesh, str(spec.get("name", f"body{i}"))))
     for i, spec in enumerate(_entries("arrays", table.get("arrays", []))):
         bodies += _array(f"arrays.{i}", spec, folder)
     if not bodies:
@@ -321,10 +322,10 @@ def _entries(where, value) -> list:
     return value
 
 
-def _body(where, spec, mesh, name=None, position=None) -> BodySpec:
-    """One body's keys (BODY_KEYS, checked by the caller) as a BodySpec; ``name`` and
+def _body(where, spec, mesh, name, position=None) -> BodySpec:
+    """One body's keys (BODY_KEYS, checked by the caller) as a BodySpec named ``name``;
     ``position`` given for the members of an array."""
-    body = BodySpec(name or str(spec.get("name", where.replace("bodies.", "body"))), mesh,
+    body = BodySpec(name, mesh,
                     position or _vector(f"{where}.position", spec["position"], 3),
                     _vector(f"{where}.orientation", spec.get("orientation", [1.0, 0, 0, 0]), 4),
                     _bool(f"{where}.fixed", spec.get("fixed", False)),

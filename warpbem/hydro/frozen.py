@@ -44,7 +44,7 @@ import warnings
 
 import numpy as np
 
-from ..surfaces.gaps import outer_radius
+from ..surfaces.gaps import candidate_pairs, outer_radius
 from .mobility import MobilitySolution, MobilitySolver, all_completion_poles, checked_bodies, checked_loads
 from .operators import DoubleLayerOperator, quadrature_strengths
 from .treecode import FarField, TreecodeOptions
@@ -78,7 +78,6 @@ class BackgroundField:
         system, x, speed = solver.last_system
         geo = system.geometry
         self.force, self.torque = solution.force, solution.torque
-        self.iterations = solution.iterations
         self.warned = False  # of points beyond the tree
         self.shear_rate, self.length, self.speed = solver.shear_rate, geo.length_scale, speed
         # the double layer sees the non-rigid part of the density, the completions the loads
@@ -102,27 +101,29 @@ class BackgroundField:
 
     def velocity(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) u_bg (m/s) at ``points`` (m) outside the adherent cells."""
-        x = np.asarray(points, dtype=float).reshape(-1, 3) / self.length
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        x = points / self.length
         far, op = self.far, self.operator
-        inside = far.covers(x) if far is not None else np.ones(len(x), dtype=bool)
-        w = np.zeros_like(x)
-        if far is None:
+        if far is None:  # a small array: the direct sum
             w = op.field_at(x, self.density, self.pole_forces)
-        elif inside.any():
-            seg = far.segments_at(x[inside])
-            group = far.group_of_target(seg)
-            w[inside] = far.interpolate(self.values, seg) + op.field_at(
-                x[inside], self.density, self.pole_forces, (group, *far.near_lists(far.leaf_of_element, seg)),
-                (group, *far.near_lists(far.leaf_of_pole, seg)))
-        if not inside.all():
-            if not self.warned:
-                warnings.warn("points outside the region the frozen array's tree covers (the bodies at set-up and"
-                              f" {COVER_SHARE:g} of their extent around, a radius above): their background flow is"
-                              " summed directly over every element, which is slower", stacklevel=2)
-                self.warned = True
-            w[~inside] = op.field_at(x[~inside], self.density, self.pole_forces)
+        else:
+            w = np.zeros_like(x)
+            inside = far.covers(x)
+            if inside.any():
+                seg = far.segments_at(x[inside])
+                group = far.group_of_target(seg)
+                w[inside] = far.interpolate(self.values, seg) + op.field_at(
+                    x[inside], self.density, self.pole_forces, (group, *far.near_lists(far.leaf_of_element, seg)),
+                    (group, *far.near_lists(far.leaf_of_pole, seg)))
+            if not inside.all():
+                if not self.warned:
+                    warnings.warn("points outside the region the frozen array's tree covers (the bodies at set-up"
+                                  f" and {COVER_SHARE:g} of their extent around, a radius above): their background"
+                                  " flow is summed directly over every element, which is slower", stacklevel=2)
+                    self.warned = True
+                w[~inside] = op.field_at(x[~inside], self.density, self.pole_forces)
         u = w * self.speed
-        u[:, 0] += self.shear_rate * np.asarray(points, dtype=float).reshape(-1, 3)[:, 2]
+        u[:, 0] += self.shear_rate * points[:, 2]
         return u
 
 
@@ -226,11 +227,10 @@ class FrozenArraySolver:
 
     def _near(self, bodies, free, adherent) -> np.ndarray:
         """The adherent cells whose bounding sphere comes within the cut-off of a free cell's."""
-        if not len(free):
-            return np.zeros(0, dtype=int)
-        centres = np.array([bodies[i].position for i in adherent])
-        gaps = np.full(len(adherent), np.inf)
-        for i in free:
-            distance = np.linalg.norm(centres - bodies[i].position, axis=1) - self._radii - outer_radius(bodies[i].mesh)
-            gaps = np.minimum(gaps, distance)
-        return adherent[gaps < self.cutoff]
+        radii = np.zeros(len(bodies))
+        radii[adherent] = self._radii
+        radii[free] = [outer_radius(bodies[i].mesh) for i in free]
+        fixed = np.zeros(len(bodies), dtype=bool)
+        fixed[adherent] = True
+        pairs = candidate_pairs([b.position for b in bodies], radii, fixed, False, self.cutoff)
+        return np.array(sorted({j for unused, j in pairs if fixed[j]}), dtype=int)

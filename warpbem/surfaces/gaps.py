@@ -49,15 +49,15 @@ def candidate_pairs(positions, outer_radii, fixed, wall: bool, within: float) ->
     """(i, j) with body i free and j another body or WALL whose bounding spheres (``outer_radii``
     about ``positions``) come closer than ``within`` (m): the only pairs whose surface gap can be
     below ``within``. Each pair of free bodies appears once; fixed bodies are never ``i``."""
+    positions, outer_radii = np.asarray(positions, dtype=float), np.asarray(outer_radii, dtype=float)
+    fixed = np.asarray(fixed, dtype=bool)
     pairs = []
-    for i in np.flatnonzero(~np.asarray(fixed, dtype=bool)):
+    for i in np.flatnonzero(~fixed):
         if wall and positions[i][2] - outer_radii[i] < within:
             pairs.append((int(i), WALL))
-        for j in range(len(positions)):
-            if j == i or (not fixed[j] and j < i):
-                continue
-            if np.linalg.norm(np.subtract(positions[i], positions[j])) - outer_radii[i] - outer_radii[j] < within:
-                pairs.append((int(i), j))
+        # every other body at once: a loop over them took most of a step among 1000 fixed cells
+        gaps = np.linalg.norm(positions - positions[i], axis=1) - outer_radii[i] - outer_radii
+        pairs += [(int(i), int(j)) for j in np.flatnonzero(gaps < within) if j != i and (fixed[j] or j > i)]
     return pairs
 
 
