@@ -32,7 +32,7 @@ def solve(mesh, h, ratio, p, fixed=False, motion=None, shear=0.0):
     if motion is not None:
         kwargs = dict(velocity=motion[:3], angular_velocity=motion[3:])
     body = wb.Body(mesh, position=(0, 0, h), fixed=fixed or motion is not None, **kwargs)
-    return wb.solve_mobility([body], shear_rate=shear, viscosity=1.0, contact_refinement=ratio, density_order=p)
+    return wb.solve_mobility([body], shear_rate=shear, viscosity=1.0, options=wb.SolverOptions(contact_refinement=ratio, density_order=p))
 
 
 def errors_at(mesh, h, ratio, p):

@@ -29,7 +29,7 @@ import numpy as np
 
 import warpbem as wb
 from common import arguments, output, print_table, pyplot, save_chart, write_csv
-from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy
+from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy, build_solver
 from warpbem.dynamics.simulator import Simulator
 from warpbem.forces.adhesion import Adhesion
 from warpbem.forces.external import STANDARD_GRAVITY, Gravity
@@ -80,7 +80,7 @@ def kernel_throughput(device, sizes):
         n = cells * cap
         rows.append(dict(cells=cells, bonds=n, receptors=len(adh.tips), loads_s=t_loads, loads_bonds_per_s=n / t_loads,
                          kinetics_s=t_kin, kinetics_receptors_per_s=len(adh.tips) / t_kin))
-    solver = SolverOptions().build(Flow(100.0, 1e-3), device)
+    solver = build_solver(SolverOptions(), Flow(100.0, 1e-3), device)
     solver.reuse = False  # from scratch: no kept blocks, no warm start
     mesh4 = wb.mesh.sphere(A, 4)
     solver.solve([Body(mesh4, position=(0, 0, REST))])
@@ -141,7 +141,7 @@ def lateral_error(device, spacing, shifts):
     model = Model([mesh, mesh], [False, False], Flow(100.0, 1e-3), solver=SolverOptions())
     from warpbem.dynamics.hydrodynamics import HydrodynamicSolves
 
-    hydro = HydrodynamicSolves(model, model.solver.build(model.flow, device))
+    hydro = HydrodynamicSolves(model, build_solver(model.solver, model.flow, device))
 
     def mobility(shift):
         bodies = [Body(mesh, position=(0.0, 0.0, REST)), Body(mesh, position=(spacing + shift, 0.0, REST))]
@@ -178,7 +178,7 @@ def interaction_error(device, spacing, lattices, fine=0.5e-9):
     for lattice in lattices:
         model = Model([mesh, mesh], [False, False], Flow(100.0, 1e-3),
                       solver=SolverOptions(reuse_tolerance=fine, reuse_lateral=spacing / 8, reuse_interaction=lattice))
-        hydro = HydrodynamicSolves(model, model.solver.build(model.flow, device))
+        hydro = HydrodynamicSolves(model, build_solver(model.solver, model.flow, device))
         base = np.round(REST / lattice) * lattice
         for name, offsets in (("opposite", (0.4, -0.4)), ("same", (0.4, 0.4))):
             bodies = [Body(mesh, position=(0.0, 0.0, base + offsets[0] * lattice)),

@@ -32,7 +32,7 @@ def traction_row(k, device):
     exact = 5 * MU * s.normals @ RATE
     free_time = best_time(lambda: wb.solve_traction([body], SHEAR, MU, wall=False, device=device))
     held = Body(wb.mesh.sphere(A, k), position=(0.0, 0.0, 1.1 * A), fixed=True)
-    loads = wb.solve_mobility([held], SHEAR, MU, device=device, density_order=1)  # the traction's scheme
+    loads = wb.solve_mobility([held], SHEAR, MU, device=device, options=wb.SolverOptions(density_order=1))  # the traction's scheme
     h = wb.solve_traction([held], SHEAR, MU, forces=loads.force, torques=loads.torque, device=device)
     held_time = best_time(lambda: wb.solve_traction([held], SHEAR, MU, forces=loads.force, torques=loads.torque,
                                                     device=device))

@@ -59,6 +59,7 @@ def crossing_overrides(n: int, x: float | None = None) -> list:
 def errors(args):
     import warpbem as wb
     from warpbem.app import scene as scenes
+    from warpbem.dynamics.model import build_solver
     from warpbem.hydro.frozen import FrozenArraySolver
 
     loaded = scenes.load(SCENE, crossing_overrides(args.side))
@@ -70,8 +71,8 @@ def errors(args):
     free_mesh = loaded.bodies[0].mesh
     weight = np.zeros((len(fixed_bodies) + 1, 3))
     weight[0] = gravity.force[0]
-    full = without_split(options).build(flow, args.device)
-    split = FrozenArraySolver(without_split(options).build(flow, args.device), cutoff=0.0)
+    full = build_solver(without_split(options), flow, args.device)
+    split = FrozenArraySolver(build_solver(without_split(options), flow, args.device), cutoff=0.0)
     rows, raw = [], []
     for x in args.positions:
         bodies = [wb.Body(free_mesh, position=(x, 0.0, 6e-6))] + fixed_bodies
@@ -213,6 +214,7 @@ def suspension(args):
     per step, set-up and memory with its own cut-off."""
     import warpbem as wb
     from warpbem.app import scene as scenes
+    from warpbem.dynamics.model import build_solver
     from warpbem.hydro.frozen import FrozenArraySolver
 
     loaded = scenes.load(ROOT / "scenes" / SUSPENSION)
@@ -222,7 +224,7 @@ def suspension(args):
     rows = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", wb.ContactResolutionWarning)
-        full = without_split(model.solver).build(model.flow, args.device)
+        full = build_solver(without_split(model.solver), model.flow, args.device)
         t = time.perf_counter()
         exact = full.solve(bodies, forces=weight)
         rows.append(dict(solve="full", cutoff_um=float("nan"), near=int(model.fixed_mask.sum()),
@@ -231,7 +233,7 @@ def suspension(args):
         print_table(rows[-1:])
         del full
         for cutoff in args.suspension_cutoffs:
-            split = FrozenArraySolver(without_split(model.solver).build(model.flow, args.device), cutoff)
+            split = FrozenArraySolver(build_solver(without_split(model.solver), model.flow, args.device), cutoff)
             t = time.perf_counter()
             split.solve(bodies, forces=weight)  # the background set up, and the first solve
             first = time.perf_counter() - t

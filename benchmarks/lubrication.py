@@ -39,7 +39,7 @@ def pair_force(k, eps, velocity, device):
               wb.Body(mesh, position=(2 * A + eps, 0, 0), fixed=True, velocity=-np.asarray(velocity))]
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", wb.ContactResolutionWarning)
-        s = wb.solve_mobility(bodies, viscosity=MU, wall=False, device=device, density_order=1)  # the scenes' scheme
+        s = wb.solve_mobility(bodies, viscosity=MU, wall=False, device=device, options=wb.SolverOptions(density_order=1))  # the scenes' scheme
     unresolved = any(issubclass(w.category, wb.ContactResolutionWarning) for w in caught)
     return -s.force[0], len(s.solution_vector) // 3, unresolved  # the fluid's force on A
 

@@ -133,9 +133,9 @@ def near_contact_target(settings=NEAR_CONTACT_SETTINGS) -> tuple[list[dict], boo
         for k, ratio in settings:
             mesh = wb.mesh.sphere(1.0, k)
             free = lambda: wb.solve_mobility([wb.Body(mesh, position=(0, 0, h))], shear_rate=1.0, viscosity=1.0,
-                                             contact_refinement=ratio)
+                                             options=wb.SolverOptions(contact_refinement=ratio))
             held = lambda: wb.solve_mobility([wb.Body(mesh, position=(0, 0, h), fixed=True, velocity=(0, 0, 1.0))],
-                                             viscosity=1.0, contact_refinement=ratio)
+                                             viscosity=1.0, options=wb.SolverOptions(contact_refinement=ratio))
             times = {}
             for name, solve in (("free", free), ("held", held)):
                 solve()

@@ -31,8 +31,8 @@ def scene(n_fixed, mesh, x_free):
 
 def run(n_fixed, reuse, solves, mesh, device="cpu", precondition=True):
     # the constant density of the time-stepping scenes, whose repeated solves this measures
-    solver = wb.MobilitySolver(shear_rate=100.0, viscosity=1.2e-3, contact_refinement=0.0, reuse=reuse,
-                               device=device, precondition=precondition, density_order=1)
+    solver = wb.MobilitySolver(shear_rate=100.0, viscosity=1.2e-3, options=wb.SolverOptions(contact_refinement=0.0, precondition=precondition, density_order=1), keep_systems=reuse,
+                               device=device)
     times, iterations = [], []
     for step in range(solves):
         bodies = scene(n_fixed, mesh, -20e-6 + 0.1e-6 * step)

@@ -32,6 +32,7 @@ from warpbem import Body, ContactResolutionWarning, MobilitySolver, mesh, runtim
 from warpbem.hydro.geometry import SurfaceGeometry
 from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions
 from warpbem.hydro.treecode import TreecodeOptions
+from warpbem.hydro.options import SolverOptions
 
 
 def cpu_seconds():
@@ -149,9 +150,7 @@ def main():
                   ("matrix_free", n <= args.solve_max), ("treecode", n <= args.treecode_solve_max)]
         for mode, wanted in solves:
             if wanted:
-                solver = MobilitySolver(shear_rate=1.0, viscosity=1.0, device=device, operator=mode,
-                                        contact_refinement=0.0, reuse=False, density_order=1,
-                                        treecode=TreecodeOptions())  # its default tolerance
+                solver = MobilitySolver(shear_rate=1.0, viscosity=1.0, device=device, options=SolverOptions(operator=mode, contact_refinement=0.0, density_order=1, treecode=TreecodeOptions()), keep_systems=False)  # its default tolerance
                 t = time.perf_counter()
                 sol = solver.solve(bodies)
                 row[f"solve_{mode}_s"] = time.perf_counter() - t

@@ -11,6 +11,7 @@ from .hydro.frozen import FrozenArraySolver
 from .hydro.linalg import ConvergenceError
 from .hydro.mobility import ContactResolutionWarning, MobilitySolution, MobilitySolver, solve_mobility
 from .hydro.traction import TractionSolution, solve_traction
+from .hydro.options import Flow, SolverOptions
 from .hydro.treecode import TreecodeOptions
 from .surfaces import mesh
 from .surfaces.body import Body
@@ -18,7 +19,7 @@ from .surfaces.mesh import MeshError
 from .surfaces.placement import PlacementError
 
 __version__ = "0.1.0"
-__all__ = ["mesh", "units", "Body", "solve_mobility", "MobilitySolver", "FrozenArraySolver", "MobilitySolution",
+__all__ = ["mesh", "units", "Body", "Flow", "SolverOptions", "solve_mobility", "MobilitySolver", "FrozenArraySolver", "MobilitySolution",
            "solve_traction",
            "TractionSolution", "TreecodeOptions", "ConvergenceError", "DeformationError", "DeformationWarning",
            "MeshError", "PlacementError", "ContactResolutionWarning", "__version__"]

@@ -55,7 +55,7 @@ def test_bilinear_density_matrix_free_product_equals_the_assembled_one():
 
 def test_density_order_is_checked():
     with pytest.raises(ValueError, match="density_order"):
-        wb.MobilitySolver(density_order=4)
+        wb.MobilitySolver(options=wb.SolverOptions(density_order=4))
 
 
 def test_bilinear_density_keeps_a_fixed_cells_blocks_and_matches_matrix_free_with_two_bodies():
@@ -76,5 +76,5 @@ def test_bilinear_density_keeps_a_fixed_cells_blocks_and_matches_matrix_free_wit
             np.testing.assert_allclose(kept.velocity, fresh.velocity, rtol=0, atol=1e-7 * np.abs(fresh.velocity).max())
             np.testing.assert_allclose(kept.force, fresh.force, rtol=0, atol=1e-7 * np.abs(fresh.force).max())
         assert kept.reused_bodies.tolist() == [False, True]
-        free = wb.solve_mobility(bodies, 1.0, 1.0, operator="matrix_free")
+        free = wb.solve_mobility(bodies, 1.0, 1.0, options=wb.SolverOptions(operator="matrix_free"))
     np.testing.assert_allclose(free.velocity, fresh.velocity, rtol=0, atol=1e-9 * np.abs(fresh.velocity).max())

@@ -20,9 +20,9 @@ def adherent_grid(side, pitch=3.0, height=1.2, refinement=2):
             for i in range(side * side)]
 
 
-def solver(**kw):
+def solver():
     # no contact refinement: the near systems then hold exactly the full system's elements
-    return wb.MobilitySolver(SHEAR, VISCOSITY, density_order=1, contact_refinement=0, **kw)
+    return wb.MobilitySolver(SHEAR, VISCOSITY, options=wb.SolverOptions(density_order=1, contact_refinement=0))
 
 
 @pytest.fixture(scope="module")
@@ -185,7 +185,7 @@ def test_a_run_with_the_split_steps_as_the_full_one_when_every_cell_is_near():
         for _ in range(2):
             state, frame = sim.step(state)
         ends[cutoff] = (state.positions[0] - positions[0], frame.force[1:])
-    assert ("near-far" in sim.solver.operator)
+    assert ("near-far" in sim.solver.operator_description)
     moved, held = ends[None]
     np.testing.assert_allclose(ends[1e-3][0], moved, rtol=0, atol=1e-6 * np.abs(moved).max())
     np.testing.assert_allclose(ends[1e-3][1], held, rtol=0, atol=1e-6 * np.abs(held).max())

@@ -39,7 +39,7 @@ def test_overlap_names_both_bodies_even_when_barely_touching():
     # (resolving it takes thousands of elements, and is not what this test is about)
     bodies[1] = wb.Body(SPHERE, position=(2.001, 0, 2.0))
     with pytest.warns(wb.ContactResolutionWarning):
-        wb.solve_mobility(bodies, wall=False, forces=[[0, 0, 1.0], [0, 0, 0]], contact_refinement=0.0, density_order=1)
+        wb.solve_mobility(bodies, wall=False, forces=[[0, 0, 1.0], [0, 0, 0]], options=wb.SolverOptions(contact_refinement=0.0, density_order=1))
 
 
 def test_reference_point_must_be_inside_the_mesh():
@@ -51,17 +51,27 @@ def test_reference_point_must_be_inside_the_mesh():
 @pytest.mark.parametrize("kwargs, error, message", [
     (dict(forces=np.zeros((2, 3))), ValueError, r"forces must have shape \(1, 3\)"),
     (dict(torques=[[0, np.inf, 0]]), ValueError, r"torques\[0\] \(body 0\) is not finite"),
-    (dict(viscosity=0.0), ValueError, "viscosity must be a positive"),
-    (dict(shear_rate=np.nan), ValueError, "shear_rate must be a finite"),
-    (dict(dtype="float16"), ValueError, "dtype must be"),
-    (dict(operator="sparse"), ValueError, "operator mode must be"),
+    (dict(viscosity=0.0), ValueError, r"viscosity: 0 is outside the allowed range \(0, 1000\]"),
+    (dict(shear_rate=np.nan), ValueError, "shear_rate: expected a finite number"),
     (dict(device="cuda:7"), ValueError, "device 'cuda:7' is not available"),
-    (dict(quadrature_order=0), ValueError, "quadrature order"),
-    (dict(tolerance=2.0), ValueError, "tolerance"),
 ])
 def test_solver_arguments_are_checked(kwargs, error, message):
     with pytest.raises(error, match=message):
         wb.solve_mobility([wb.Body(SPHERE, position=(0, 0, 3.0))], **{"shear_rate": 1.0, **kwargs})
+
+
+@pytest.mark.parametrize("options, message", [
+    (dict(dtype="float16"), "dtype: 'float16' is not one of 'float64', 'float32'"),
+    (dict(operator="sparse"), "operator: 'sparse' is not one of 'auto'"),
+    (dict(quadrature_order=0), r"quadrature_order: 0 is outside the allowed range \[1, 10\]"),
+    (dict(tolerance=2.0), r"tolerance: 2 is outside the allowed range \(0, 0.1\]"),
+    (dict(density_order=1.5), "density_order: expected an integer"),
+])
+def test_solver_options_are_checked_by_their_declaration(options, message):
+    """SolverOptions checks each field against its declared range (warpbem/options.py), with
+    the message the scene files get too (tests/unit/test_scene.py)."""
+    with pytest.raises(ValueError, match=message):
+        wb.SolverOptions(**options)
 
 
 def test_loads_on_fixed_bodies_are_refused():
@@ -73,7 +83,7 @@ def test_loads_on_fixed_bodies_are_refused():
 def test_gmres_failure_reports_iterations_and_residual():
     bodies = [wb.Body(SPHERE, position=(0, 0, 1.3)), wb.Body(SPHERE, position=(2.2, 0, 1.3), fixed=True)]
     with pytest.raises(wb.ConvergenceError, match=r"\d+ iterations, relative residual \d"):
-        wb.solve_mobility(bodies, shear_rate=1.0, tolerance=1e-14, max_iterations=3)
+        wb.solve_mobility(bodies, shear_rate=1.0, options=wb.SolverOptions(tolerance=1e-14, max_iterations=3))
 
 
 def test_empty_scene_is_refused():

@@ -14,7 +14,7 @@ from warpbem import runtime
 SPHERE = wb.mesh.sphere(1.0, 3)
 
 
-def _two_sphere_mobility(**options):
+def _two_sphere_mobility():
     """12x12 mobility of two free spheres near the wall: columns from unit forces/torques."""
     positions = [(0.0, 0.0, 1.4), (2.3, 0.7, 1.8)]
     bodies = [wb.Body(SPHERE, position=p) for p in positions]
@@ -23,7 +23,7 @@ def _two_sphere_mobility(**options):
         loads = np.zeros(12)
         loads[k] = 1.0
         f = loads.reshape(2, 6)
-        sol = wb.solve_mobility(bodies, viscosity=1.0, forces=f[:, :3], torques=f[:, 3:], **options)
+        sol = wb.solve_mobility(bodies, viscosity=1.0, forces=f[:, :3], torques=f[:, 3:])
         columns.append(np.concatenate([np.concatenate([sol.velocity[i], sol.angular_velocity[i]]) for i in range(2)]))
     return np.array(columns).T
 
@@ -50,10 +50,10 @@ def test_fixed_and_free_formulations_agree(shape):
         mesh = wb.mesh.Mesh(spheroid.nodes + [0.2, -0.1, 0.05], spheroid.elements)
         orientation = (0.9, 0.3, -0.2, 0.1)
     held = wb.Body(mesh, position=(0.0, 0.0, 1.3), orientation=orientation, fixed=True)
-    fixed = wb.solve_mobility([held, neighbour], shear_rate=1.0, viscosity=1.0, tolerance=1e-11)
+    fixed = wb.solve_mobility([held, neighbour], shear_rate=1.0, viscosity=1.0, options=wb.SolverOptions(tolerance=1e-11))
     free = wb.solve_mobility([wb.Body(mesh, position=(0.0, 0.0, 1.3), orientation=orientation), neighbour],
                              shear_rate=1.0, viscosity=1.0, forces=[fixed.force[0], [0, 0, 0]],
-                             torques=[fixed.torque[0], [0, 0, 0]], tolerance=1e-11)
+                             torques=[fixed.torque[0], [0, 0, 0]], options=wb.SolverOptions(tolerance=1e-11))
     scale = np.abs(fixed.velocity[1]).max()
     assert np.abs(free.velocity[0]).max() < 1e-3 * scale
     assert np.abs(free.angular_velocity[0]).max() < 1e-3 * scale
@@ -65,8 +65,8 @@ def _scene():
 
 
 def test_matrix_free_solve_matches_dense(device):
-    dense = wb.solve_mobility(_scene(), shear_rate=1.0, operator="dense", device=device, tolerance=1e-10)
-    free = wb.solve_mobility(_scene(), shear_rate=1.0, operator="matrix_free", device=device, tolerance=1e-10)
+    dense = wb.solve_mobility(_scene(), shear_rate=1.0, options=wb.SolverOptions(operator="dense", tolerance=1e-10), device=device)
+    free = wb.solve_mobility(_scene(), shear_rate=1.0, options=wb.SolverOptions(operator="matrix_free", tolerance=1e-10), device=device)
     assert dense.operator_mode == "dense" and free.operator_mode == "matrix_free"
     np.testing.assert_allclose(free.velocity, dense.velocity, atol=1e-8)
     np.testing.assert_allclose(free.force, dense.force, atol=1e-8 * np.abs(dense.force).max())
@@ -74,7 +74,7 @@ def test_matrix_free_solve_matches_dense(device):
 
 def test_float32_agrees_with_float64_to_single_precision():
     d = wb.solve_mobility(_scene(), shear_rate=1.0, viscosity=1e-3)
-    s = wb.solve_mobility(_scene(), shear_rate=1.0, viscosity=1e-3, dtype="float32", tolerance=1e-6)
+    s = wb.solve_mobility(_scene(), shear_rate=1.0, viscosity=1e-3, options=wb.SolverOptions(dtype="float32", tolerance=1e-6))
     np.testing.assert_allclose(s.velocity, d.velocity, atol=2e-5 * np.abs(d.velocity).max())
     np.testing.assert_allclose(s.force, d.force, atol=2e-5 * np.abs(d.force).max())
 
@@ -126,11 +126,11 @@ def test_repeated_solves_reuse_fixed_blocks_and_match_fresh_solves():
     completion columns, warm-starts GMRES, and gives what a fresh solve gives."""
     fixed = [wb.Body(SPHERE, position=(0.0, 0.0, 1.3), fixed=True),
              wb.Body(SPHERE, position=(3.0, 0.5, 1.2), fixed=True)]
-    solver = wb.MobilitySolver(shear_rate=1.0, viscosity=1.0, tolerance=1e-10)
+    solver = wb.MobilitySolver(shear_rate=1.0, viscosity=1.0, options=wb.SolverOptions(tolerance=1e-10))
     for step, x in enumerate((-3.0, -2.8, -2.6)):
         bodies = [*fixed, wb.Body(SPHERE, position=(x, 1.8, 1.9))]
         sol = solver.solve(bodies)
-        fresh = wb.solve_mobility(bodies, shear_rate=1.0, viscosity=1.0, tolerance=1e-10)
+        fresh = wb.solve_mobility(bodies, shear_rate=1.0, viscosity=1.0, options=wb.SolverOptions(tolerance=1e-10))
         np.testing.assert_allclose(sol.velocity, fresh.velocity, rtol=0, atol=1e-8)
         np.testing.assert_allclose(sol.force, fresh.force, rtol=0, atol=1e-8 * np.abs(fresh.force).max())
         if step == 0:
@@ -147,25 +147,26 @@ def test_a_dense_run_updates_its_matrix_in_place():
     when the count changes (contact refinement), it assembles a new one."""
     fixed = [wb.Body(SPHERE, position=(0.0, 0.0, 1.3), fixed=True),
              wb.Body(SPHERE, position=(3.0, 0.5, 1.2), fixed=True)]
-    options = dict(shear_rate=1.0, viscosity=1.0, tolerance=1e-10, operator="dense", density_order=1)
-    solver = wb.MobilitySolver(**options)
+    flow = dict(shear_rate=1.0, viscosity=1.0)
+    options = wb.SolverOptions(tolerance=1e-10, operator="dense", density_order=1)
+    solver = wb.MobilitySolver(**flow, options=options)
     buffers = []
     for x in (-3.0, -2.8):
         bodies = [*fixed, wb.Body(SPHERE, position=(x, 1.8, 1.9))]
         sol = solver.solve(bodies)
-        buffers.append(solver._last[0].operator.assemble().ptr)
-        fresh = wb.solve_mobility(bodies, **options)
+        buffers.append(solver._last[0].double_layer.assemble().ptr)
+        fresh = wb.solve_mobility(bodies, **flow, options=options)
         np.testing.assert_allclose(sol.velocity, fresh.velocity, rtol=0, atol=1e-8)
     assert buffers[0] == buffers[1]
     # the moving cell first, refined near contact, then away: its count changes, and the kept
     # cells' block moves within the same buffer (the other way it would not fit: a new one)
-    solver = wb.MobilitySolver(**options)
+    solver = wb.MobilitySolver(**flow, options=options)
     pointers = []
     for z in (3.5, 5.5):  # 0.2 radius above the first fixed cell: refined; then 2.2: not
         bodies = [wb.Body(SPHERE, position=(0.0, 0.0, z)), *fixed]
         sol = solver.solve(bodies)
-        pointers.append(solver._last[0].operator.assemble().ptr)
-        np.testing.assert_allclose(sol.velocity, wb.solve_mobility(bodies, **options).velocity, rtol=0, atol=1e-8)
+        pointers.append(solver._last[0].double_layer.assemble().ptr)
+        np.testing.assert_allclose(sol.velocity, wb.solve_mobility(bodies, **flow, options=options).velocity, rtol=0, atol=1e-8)
     sizes = solver._last[0].geometry.body_ranges[0]
     assert sizes[1] - sizes[0] == len(SPHERE.elements) and pointers[0] == pointers[1]
     # and a superseded system is gone at once, not when the cyclic collector gets to it
@@ -189,22 +190,22 @@ def test_unresolved_contacts_warn_once_naming_the_bodies():
     from warpbem.surfaces.refinement import WALL, WARN_FRACTION, refine_near_contact
 
     sphere = wb.mesh.sphere(1.0, 4)
-    bare = dict(contact_refinement=0.0)
+    bare = wb.SolverOptions(contact_refinement=0.0)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no warning where the contact is resolved
         wb.solve_mobility([wb.Body(sphere, position=(0, 0, 1.1))], shear_rate=1.0)
     with pytest.warns(wb.ContactResolutionWarning, match="body 0 and the wall are 0.03 m apart"):
-        wb.solve_mobility([wb.Body(sphere, position=(0, 0, 1.03))], shear_rate=1.0, **bare)
+        wb.solve_mobility([wb.Body(sphere, position=(0, 0, 1.03))], shear_rate=1.0, options=bare)
     pair = [wb.Body(sphere, position=(0, 0, 3.0)), wb.Body(sphere, position=(2.005, 0, 3.0))]
     with pytest.warns(wb.ContactResolutionWarning, match="body 0 and body 1"):
-        wb.solve_mobility(pair, shear_rate=1.0, **bare)
+        wb.solve_mobility(pair, shear_rate=1.0, options=bare)
     with pytest.warns(wb.ContactResolutionWarning, match="In float32, GMRES stalls"):
         try:
-            wb.solve_mobility([wb.Body(sphere, position=(0, 0, 1.03))], shear_rate=1.0, dtype="float32",
-                              tolerance=1e-6, **bare)
+            wb.solve_mobility([wb.Body(sphere, position=(0, 0, 1.03))], shear_rate=1.0,
+                              options=wb.SolverOptions(contact_refinement=0.0, dtype="float32", tolerance=1e-6))
         except wb.ConvergenceError:
             pass  # the stall the warning announces
-    solver = wb.MobilitySolver(shear_rate=1.0, **bare)
+    solver = wb.MobilitySolver(shear_rate=1.0, options=bare)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         for z in (1.03, 1.031, 1.032):
@@ -227,8 +228,8 @@ def test_block_jacobi_preconditioner_matches_plain_gmres_and_is_kept_for_fixed_b
     box = wb.mesh.load(Path(__file__).resolve().parents[2] / "scenes" / "adherent_box.q9")
     free = wb.mesh.sphere(5e-6, 2)
     adherent = wb.Body(box, position=(0.0, 0.0, 3.25e-6), fixed=True)
-    plain = wb.MobilitySolver(100.0, 1.2e-3, refine_fixed_at_wall=False, precondition=False, max_iterations=3000)
-    solver = wb.MobilitySolver(100.0, 1.2e-3, refine_fixed_at_wall=False)
+    plain = wb.MobilitySolver(100.0, 1.2e-3, options=wb.SolverOptions(refine_fixed_at_wall=False, precondition=False, max_iterations=3000))
+    solver = wb.MobilitySolver(100.0, 1.2e-3, options=wb.SolverOptions(refine_fixed_at_wall=False))
     factors = None
     for x in (-20e-6, -19e-6):  # far enough that the box is not refined for the free cell
         bodies = [wb.Body(free, position=(x, 3.5e-6, 11e-6)), adherent]
@@ -255,8 +256,8 @@ def test_block_jacobi_preconditioner_in_matrix_free_mode():
     box = wb.mesh.load(Path(__file__).resolve().parents[2] / "scenes" / "adherent_box.q9")
     bodies = [wb.Body(wb.mesh.sphere(5e-6, 2), position=(-20e-6, 3.5e-6, 11e-6)),
               wb.Body(box, position=(0.0, 0.0, 3.25e-6), fixed=True)]
-    dense = wb.solve_mobility(bodies, 100.0, 1.2e-3, operator="dense", contact_refinement=0.0)
-    free = wb.solve_mobility(bodies, 100.0, 1.2e-3, operator="matrix_free", contact_refinement=0.0)
+    dense = wb.solve_mobility(bodies, 100.0, 1.2e-3, options=wb.SolverOptions(operator="dense", contact_refinement=0.0))
+    free = wb.solve_mobility(bodies, 100.0, 1.2e-3, options=wb.SolverOptions(operator="matrix_free", contact_refinement=0.0))
     assert free.operator_mode == "matrix_free"
     assert free.iterations <= dense.iterations + 1 and free.iterations < 30  # plain GMRES: hundreds
     np.testing.assert_allclose(free.velocity, dense.velocity, rtol=0, atol=1e-7 * np.abs(dense.velocity).max())
@@ -267,12 +268,13 @@ def test_float32_converges_with_its_default_tolerance():
     """dtype="float32" needs no tolerance of its own: the default follows the precision (1e-6;
     float32 products cannot reach float64's 1e-8) and agrees with float64 to single precision."""
     d = wb.solve_mobility(_scene(), shear_rate=1.0, viscosity=1e-3)
-    s = wb.solve_mobility(_scene(), shear_rate=1.0, viscosity=1e-3, dtype="float32")
+    s = wb.solve_mobility(_scene(), shear_rate=1.0, viscosity=1e-3, options=wb.SolverOptions(dtype="float32"))
     assert s.converged and s.residual < 1e-5 and d.residual < 1e-7
     np.testing.assert_allclose(s.velocity, d.velocity, atol=2e-5 * np.abs(d.velocity).max())
-    assert wb.MobilitySolver(dtype="float32").tolerance == 1e-6 and wb.MobilitySolver().tolerance == 1e-8
-    with pytest.raises(ValueError, match="dtype must be one of"):
-        wb.MobilitySolver(dtype="float16")
+    assert wb.MobilitySolver(options=wb.SolverOptions(dtype="float32")).options.tolerance == 1e-6
+    assert wb.MobilitySolver().options.tolerance == 1e-8
+    with pytest.raises(ValueError, match="dtype: 'float16' is not one of"):
+        wb.MobilitySolver(options=wb.SolverOptions(dtype="float16"))
 
 
 def test_kept_system_is_never_taken_for_a_new_mesh():

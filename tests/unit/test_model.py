@@ -70,8 +70,7 @@ def test_a_frame_is_solved_at_its_own_positions_at_no_extra_cost(scheme, solves_
     weight = model.interaction("gravity").force
     for previous, frame in zip(frames, frames[1:]):
         bodies = model.bodies(State(frame.time, frame.positions, frame.orientations))
-        exact = wb.solve_mobility(bodies, 100.0, 1.2e-3, forces=weight, contact_refinement=0.0,
-                                  density_order=model.solver.density_order)
+        exact = wb.solve_mobility(bodies, 100.0, 1.2e-3, forces=weight, options=wb.SolverOptions(contact_refinement=0.0, density_order=model.solver.density_order))
         np.testing.assert_allclose(frame.force[1], exact.force[1], rtol=1e-6)
         np.testing.assert_allclose(frame.velocity[0], exact.velocity[0], rtol=1e-6)
         # the test can fail: the previous frame's holding load differs far beyond that

@@ -7,7 +7,7 @@ import pytest
 
 import warpbem as wb
 from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion
-from warpbem.dynamics.model import Flow, Model, SolverOptions
+from warpbem.dynamics.model import Flow, Model, SolverOptions, build_solver
 from warpbem.surfaces.body import Body
 
 A = 2e-6
@@ -19,7 +19,7 @@ HEIGHT = np.round((A + 236e-9) / COARSE) * COARSE  # on the coarse lattice
 def solves(interaction):
     model = Model([MESH, MESH], [False, False], Flow(100.0, 1e-3),
                   solver=SolverOptions(reuse_tolerance=FINE, reuse_lateral=LATERAL, reuse_interaction=interaction))
-    return HydrodynamicSolves(model, model.solver.build(model.flow, "cpu"))
+    return HydrodynamicSolves(model, build_solver(model.solver, model.flow, "cpu"))
 
 
 def motion(hydro, flow, grand):

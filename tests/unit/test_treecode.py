@@ -118,9 +118,8 @@ def test_solver_with_the_treecode_matches_the_dense_solve():
     bodies.append(wb.Body(wb.mesh.sphere(1.0, 2), position=(7.4, 7.9, 3.2)))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", wb.ContactResolutionWarning)
-        runs = {mode: wb.solve_mobility(bodies, shear_rate=1.0, operator=mode, density_order=1,
-                                        forces=np.r_[np.zeros((36, 3)), [[0, 0, -1e-13]]], contact_refinement=0.0,
-                                        treecode=TreecodeOptions(tolerance=1e-5))
+        runs = {mode: wb.solve_mobility(bodies, shear_rate=1.0, options=wb.SolverOptions(operator=mode, density_order=1, contact_refinement=0.0, treecode=TreecodeOptions(tolerance=1e-5)),
+                                        forces=np.r_[np.zeros((36, 3)), [[0, 0, -1e-13]]])
                 for mode in ("dense", "treecode")}
     dense, tree = runs["dense"], runs["treecode"]
     assert tree.operator_mode == "treecode"
@@ -140,13 +139,13 @@ def test_automatic_operator_is_decided_once_from_total_memory(monkeypatch):
     assert choose_operator(size + 1) == "treecode"
     assert choose_operator(2 * size, "float32") == "treecode" and choose_operator(size, "float32") == "dense"
 
-    solver = wb.MobilitySolver(shear_rate=1.0, density_order=1)
+    solver = wb.MobilitySolver(shear_rate=1.0, options=wb.SolverOptions(density_order=1))
     body = [wb.Body(wb.mesh.sphere(1.0, 2), position=(0, 0, 2.0))]
     assert solver.solve(body).operator_mode == "dense"
     monkeypatch.setattr(runtime, "total_memory", lambda device: 1)  # memory "gone" after the first solve
     moved = [wb.Body(wb.mesh.sphere(1.0, 2), position=(0.5, 0, 2.0))]
     assert solver.solve(moved).operator_mode == "dense"
-    assert wb.MobilitySolver(shear_rate=1.0, density_order=1).solve(moved).operator_mode == "treecode"
+    assert wb.MobilitySolver(shear_rate=1.0, options=wb.SolverOptions(density_order=1)).solve(moved).operator_mode == "treecode"
 
 
 def test_treecode_options_are_checked():
@@ -156,7 +155,7 @@ def test_treecode_options_are_checked():
         with pytest.raises(ValueError):
             TreecodeOptions(**bad)
     with pytest.raises(ValueError, match="operator mode"):
-        wb.MobilitySolver(operator="fmm")
+        wb.MobilitySolver(options=wb.SolverOptions(operator="fmm"))
     geometry = SurfaceGeometry.from_bodies(grid_of_spheres(1), 2, 1.0, True)
     with pytest.raises(ValueError, match="double layer"):
         DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="treecode", kind="single_layer")

@@ -107,7 +107,7 @@ def test_a_cell_without_bonds_moves_at_the_mobility_solver_velocity():
             assert frame.parts["bond"]["count"][0] == 0 and frame.dt == model.policy.dt_max
             bodies = model.bodies(State(frame.time, frame.positions, frame.orientations))
             exact = wb.solve_mobility(bodies, 100.0, 1e-3, forces=model.interaction("gravity").force,
-                                      density_order=model.solver.density_order)
+                                      options=wb.SolverOptions(density_order=model.solver.density_order))
             np.testing.assert_allclose(frame.velocity, exact.velocity, rtol=1e-7, atol=1e-12)
             np.testing.assert_allclose(frame.angular_velocity, exact.angular_velocity, rtol=1e-7,
                                        atol=1e-7 * np.abs(exact.angular_velocity).max())
@@ -138,7 +138,7 @@ def test_a_cell_held_by_unbreakable_bonds_rests_under_the_holding_load():
     assert abs(frame.velocity[0, 0]) < 1e-8 * free_speed and frame.parts["bond"]["count"][0] > 3
     height = round(frame.positions[0, 2] / d) * d
     held = Body(MESH, position=(0.0, 0.0, height), fixed=True)
-    exact = wb.solve_mobility([held], 100.0, 1e-3, density_order=model.solver.density_order)
+    exact = wb.solve_mobility([held], 100.0, 1e-3, options=wb.SolverOptions(density_order=model.solver.density_order))
     np.testing.assert_allclose(frame.force[0], exact.force[0], rtol=0, atol=1e-2 * np.abs(exact.force[0]).max())
     np.testing.assert_allclose(frame.torque[0], exact.torque[0], rtol=0, atol=1e-2 * np.abs(exact.torque[0]).max())
     total = sum(frame.loads[name].force[0] for name in ("gravity", "repulsion", "bond"))

@@ -75,7 +75,7 @@ def test_bilinear_density_on_the_seed_mesh_far_from_contact(sphere_mesh):
     -1.6e-4, against 1.8e-3, 1.8e-3, -3.5e-4, 7.2e-4 with the constant density."""
     mesh, h = sphere_mesh(4), 1.5
     ref = series.free_sphere_in_shear(h)
-    sol = wb.solve_mobility([wb.Body(mesh, position=(0, 0, h))], shear_rate=1.0, viscosity=1.0, density_order=2)
+    sol = wb.solve_mobility([wb.Body(mesh, position=(0, 0, h))], shear_rate=1.0, viscosity=1.0, options=wb.SolverOptions(density_order=2))
     assert abs(sol.velocity[0, 0] / h / ref["U_over_gdot_h"] - 1) < 1e-4
     assert abs(sol.angular_velocity[0, 1] / ref["Omega_over_gdot"] - 1) < 1e-4
     force, _ = resistance(mesh, (0, 0, h), np.array([1.0, 0, 0, 0, 0, 0]), density_order=2)

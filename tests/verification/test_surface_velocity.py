@@ -37,8 +37,8 @@ def test_a_surface_moving_with_the_shear_flow_leaves_it_undisturbed(wall, height
     slip = np.zeros_like(centres)
     slip[:, 0] = SHEAR * centres[:, 2]
     moving = wb.solve_mobility([Body(mesh, position=(0, 0, height), surface_velocity=slip)], SHEAR, 1e-3,
-                               wall=wall, density_order=1)
-    rigid = wb.solve_mobility([Body(mesh, position=(0, 0, height))], SHEAR, 1e-3, wall=wall, density_order=1)
+                               wall=wall, options=wb.SolverOptions(density_order=1))
+    rigid = wb.solve_mobility([Body(mesh, position=(0, 0, height))], SHEAR, 1e-3, wall=wall, options=wb.SolverOptions(density_order=1))
     ixx, izz = spheroid_moments()
     np.testing.assert_allclose(moving.velocity[0], [SHEAR * height, 0, 0], atol=1e-9 * SHEAR * A)
     assert moving.angular_velocity[0, 1] == pytest.approx(SHEAR * izz / (ixx + izz), rel=1.5e-2)
@@ -53,9 +53,9 @@ def test_only_the_non_rigid_part_of_a_surface_velocity_counts():
     mesh = wb.mesh.sphere(A, 2)
     centres = mesh.nodes[mesh.elements[:, 8]]
     rigid_field = np.array([1e-6, 2e-6, -1e-6]) + np.cross([0.0, 3.0, 1.0], centres)
-    base = wb.solve_mobility([Body(mesh, position=(0, 0, 3 * A))], SHEAR, 1e-3, density_order=1)
+    base = wb.solve_mobility([Body(mesh, position=(0, 0, 3 * A))], SHEAR, 1e-3, options=wb.SolverOptions(density_order=1))
     moved = wb.solve_mobility([Body(mesh, position=(0, 0, 3 * A), surface_velocity=rigid_field)], SHEAR, 1e-3,
-                              density_order=1)
+                              options=wb.SolverOptions(density_order=1))
     with pytest.raises(ValueError, match="density_order=1"):
         wb.solve_mobility([Body(mesh, position=(0, 0, 3 * A), surface_velocity=rigid_field)], SHEAR, 1e-3)
     np.testing.assert_allclose(moved.velocity, base.velocity, atol=1e-9 * SHEAR * A)

@@ -24,7 +24,7 @@ def test_free_sphere_in_shear_moves_with_the_fluid_exactly(sphere_mesh):
     the fluid at its centre and spins at gdot/2 (Jeffery 1922). The translation is the rigid
     part of the ambient flow, which the deflated CDL operator reproduces to GMRES tolerance."""
     body = wb.Body(sphere_mesh(4), position=(1.0, -2.0, 3.0))
-    sol = wb.solve_mobility([body], shear_rate=2.0, viscosity=1.0, wall=False, tolerance=1e-12)
+    sol = wb.solve_mobility([body], shear_rate=2.0, viscosity=1.0, wall=False, options=wb.SolverOptions(tolerance=1e-12))
     np.testing.assert_allclose(sol.velocity[0], [6.0, 0.0, 0.0], rtol=0, atol=1e-9)
     np.testing.assert_allclose(sol.angular_velocity[0], [0.0, 1.0, 0.0], rtol=0, atol=5e-4)
 

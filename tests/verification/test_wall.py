@@ -111,7 +111,7 @@ def test_convergence_order_under_refinement(sphere_mesh):
         f, _ = resistance(sphere_mesh(k), (0, 0, 1.5), np.array([0, 0, 1.0, 0, 0, 0]), contact_refinement=0.0)
         errors["brenner"].append(abs(f[2] / (6 * np.pi * BRENNER[1.5]) - 1))
         body = wb.Body(sphere_mesh(k), position=(0, 0, 1.5))
-        sol = wb.solve_mobility([body], shear_rate=1.0, viscosity=1.0, contact_refinement=0.0)
+        sol = wb.solve_mobility([body], shear_rate=1.0, viscosity=1.0, options=wb.SolverOptions(contact_refinement=0.0))
         errors["shear"].append(abs(sol.velocity[0, 0] / 1.5 / GCB_B[1.5]["U"] - 1))
     for name, err in errors.items():
         orders = np.log2(np.array(err[:-1]) / np.array(err[1:]))

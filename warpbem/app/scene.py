@@ -76,6 +76,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from ..dynamics.model import Flow, Model, SolverOptions, StepPolicy
+from ..options import OptionError, from_table
 from ..dynamics.state import State
 from ..elastic.deformable import Deformation
 from ..forces.adhesion import Adhesion
@@ -95,6 +96,14 @@ ADHESION_KEYS = {"receptor_density", "ligand_density", "spring_constant", "equil
 
 class SceneError(ValueError):
     """A scene that cannot run; the message names the field."""
+
+
+def _options(cls, table, where, **given):
+    """A declared options dataclass read from a scene table (``warpbem.options.from_table``)."""
+    try:
+        return from_table(cls, table, where, **given)
+    except OptionError as err:
+        raise SceneError(str(err)) from err
 
 
 def _number(where, value, low=-math.inf, high=math.inf, low_open=False, integer=False):
@@ -217,7 +226,9 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
                            "bodies", "arrays", "sweep"},
            ("flow", "time"))
     sweep = _sweep_axes(table.get("sweep", {}))
-    flow = _table("flow", table["flow"], {"shear_rate", "viscosity", "wall"}, ("shear_rate",))
+    if isinstance(table["flow"], dict) and "shear_rate" not in table["flow"]:
+        raise SceneError("flow: missing required key 'shear_rate'")
+    flow_ = _options(Flow, table["flow"], "flow")
     physics = _table("physics", table.get("physics", {}), {"gravity", "fluid_density", "repulsion", "adhesion"})
     adhesion = _table("adhesion", table.get("adhesion", {}), ADHESION_KEYS)
     deformation = _table("deformation", table.get("deformation", {}), {"relaxation", "update_interval",
@@ -231,10 +242,8 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
                        {"coefficient", "inverse_length", "cell_roughness", "wall_roughness"})
     time = _table("time", table["time"], {"end", "dt_max", "dt_min", "contact_gap", "scheme", "frame_every",
                                           "frame_interval"}, ("end",))
-    solver = _table("solver", table.get("solver", {}), {"quadrature_order", "density_order", "contact_refinement",
-                                                        "tolerance",
-                                                        "refine_fixed_at_wall", "dtype", "reuse_tolerance",
-                                                        "reuse_lateral", "reuse_interaction", "near_far_cutoff"})
+    solver = _table("solver", table.get("solver", {}), {name for name in SolverOptions.__dataclass_fields__
+                                                        if name != "treecode"})
     bodies = []
     for i, spec in enumerate(_entries("bodies", table.get("bodies", []))):
         where = f"bodies.{i}"
@@ -272,38 +281,19 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
         interactions.append(repulsion_model)
     adhesive = _bool("physics.adhesion", physics.get("adhesion", False))
     if adhesive:
-        interactions.append(_adhesion(adhesion, bodies, repulsion_model, dt_min,
-                                      _bool("flow.wall", flow.get("wall", True))))
-    flow_ = Flow(_number("flow.shear_rate", flow["shear_rate"], -1e6, 1e6),
-                 _number("flow.viscosity", flow.get("viscosity", 1.2e-3), 0, 1e3, low_open=True),
-                 _bool("flow.wall", flow.get("wall", True)))
+        interactions.append(_adhesion(adhesion, bodies, repulsion_model, dt_min, flow_.wall))
+    # bonds: mobility snapshots reused across steps unless the scene says otherwise (SolverOptions)
+    solver_options = _options(SolverOptions, {"reuse_tolerance": ADHESION_REUSE_TOLERANCE, **solver} if adhesive
+                              else solver, "solver").resolved(time_stepping=True)
     if any(b.deformable for b in bodies):
         interactions.append(Deformation(
             meshes_, [b.deformable for b in bodies], [b.shear_modulus for b in bodies],
             [b.poisson_ratio for b in bodies], flow_,
-            relaxation=relaxation, surface_velocity=surface_velocity, update_interval=update_interval))
-    tolerance = solver.get("tolerance")
-    reuse = _number("solver.reuse_tolerance", solver.get("reuse_tolerance", ADHESION_REUSE_TOLERANCE if adhesive
-                                                          else 0.0), 0, 1e-6)
+            relaxation=relaxation, surface_velocity=surface_velocity, update_interval=update_interval,
+            solver=solver_options))
     model = Model(
         meshes=meshes_, fixed=fixed, names=[b.name for b in bodies], interactions=interactions,
-        flow=flow_,
-        solver=SolverOptions(
-            quadrature_order=_number("solver.quadrature_order", solver.get("quadrature_order", 2), 1, 10, integer=True),
-            density_order=_number("solver.density_order", solver.get("density_order", 1), 1, 3, integer=True),
-            contact_refinement=(None if "contact_refinement" not in solver else
-                                _number("solver.contact_refinement", solver["contact_refinement"], 0, 20)),
-            refine_fixed_at_wall=_bool("solver.refine_fixed_at_wall", solver.get("refine_fixed_at_wall", True)),
-            tolerance=None if tolerance is None else _number("solver.tolerance", tolerance, 0, 0.1, low_open=True),
-            dtype=_choice("solver.dtype", solver.get("dtype", "float64"), ("float64", "float32")),
-            reuse_tolerance=reuse,
-            reuse_lateral=(None if "reuse_lateral" not in solver else
-                           _number("solver.reuse_lateral", solver["reuse_lateral"], 0, 1e-5, low_open=True)),
-            reuse_interaction=(None if "reuse_interaction" not in solver else
-                               _number("solver.reuse_interaction", solver["reuse_interaction"], max(reuse, 1e-12),
-                                       1e-6)),
-            near_far_cutoff=(None if "near_far_cutoff" not in solver else
-                             _number("solver.near_far_cutoff", solver["near_far_cutoff"], 0, 1e-2))),
+        flow=flow_, solver=solver_options,
         policy=StepPolicy(dt_max, dt_min,
                           _number("time.contact_gap", time.get("contact_gap", 5e-7), 0, 1e-2, low_open=True)),
         scheme=scheme)

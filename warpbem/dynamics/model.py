@@ -13,6 +13,7 @@ import numpy as np
 from ..forces.interaction import Interaction
 from ..hydro.frozen import FrozenArraySolver
 from ..hydro.mobility import MobilitySolver
+from ..hydro.options import Flow, SolverOptions
 from ..surfaces.body import Body
 from ..surfaces.gaps import outer_radius
 from ..surfaces.mesh import Mesh
@@ -20,59 +21,11 @@ from .integrate import SCHEMES
 from .state import State
 
 
-@dataclass(frozen=True)
-class Flow:
-    """Undisturbed flow u = shear_rate z e_x (1/s) of viscosity (Pa s), above the no-slip wall
-    z = 0 if ``wall`` (else unbounded)."""
-
-    shear_rate: float = 0.0
-    viscosity: float = 1e-3
-    wall: bool = True
-
-    def __post_init__(self):
-        if isinstance(self.shear_rate, bool) or not np.isfinite(self.shear_rate):
-            raise ValueError(f"shear_rate must be a finite number (1/s), got {self.shear_rate!r}")
-        if isinstance(self.viscosity, bool) or not (np.isfinite(self.viscosity) and self.viscosity > 0):
-            raise ValueError(f"viscosity (Pa s) must be a positive finite number, got {self.viscosity!r}")
-
-
-@dataclass(frozen=True)
-class SolverOptions:
-    """Options of the mobility solver (``MobilitySolver``): tolerance None follows the dtype."""
-
-    quadrature_order: int = 2
-    contact_refinement: float | None = None  # None: the solver's default for the density order
-    refine_fixed_at_wall: bool = True
-    density_order: int = 1  # 1: constant per element (the seed's); 2: bilinear (hydro/mobility.py)
-    tolerance: float | None = None
-    dtype: str = "float64"
-    operator: str = "auto"
-    max_iterations: int = 600
-    reuse_tolerance: float = 0.0  # m: 0 solves every state; > 0 reuses snapshots (hydrodynamics.py)
-    reuse_lateral: float | None = None  # m: their lateral lattice with several bodies (None: 50 x)
-    reuse_interaction: float | None = None  # m: heights of the several-body snapshots (None: 10 x)
-    # m: adherent cells farther than this from every free cell keep the background solved once
-    # (hydro/frozen.py); None: every solve holds every body
-    near_far_cutoff: float | None = None
-
-    def __post_init__(self):
-        if not (np.isfinite(self.reuse_tolerance) and self.reuse_tolerance >= 0):
-            raise ValueError(f"reuse_tolerance must be >= 0 (m), got {self.reuse_tolerance!r}")
-        if self.reuse_lateral is not None and not (np.isfinite(self.reuse_lateral) and self.reuse_lateral > 0):
-            raise ValueError(f"reuse_lateral must be > 0 (m), got {self.reuse_lateral!r}")
-        if self.reuse_interaction is not None and not (np.isfinite(self.reuse_interaction)
-                                                       and self.reuse_interaction >= self.reuse_tolerance > 0):
-            raise ValueError(f"reuse_interaction must be >= reuse_tolerance > 0 (m), got {self.reuse_interaction!r}")
-        if self.near_far_cutoff is not None and not (np.isfinite(self.near_far_cutoff) and self.near_far_cutoff >= 0):
-            raise ValueError(f"near_far_cutoff must be >= 0 (m) or None, got {self.near_far_cutoff!r}")
-
-    def build(self, flow: Flow, device) -> MobilitySolver | FrozenArraySolver:
-        solver = MobilitySolver(flow.shear_rate, flow.viscosity, flow.wall, device,
-                                quadrature_order=self.quadrature_order, tolerance=self.tolerance,
-                                max_iterations=self.max_iterations, dtype=self.dtype, operator=self.operator,
-                                contact_refinement=self.contact_refinement,
-                                refine_fixed_at_wall=self.refine_fixed_at_wall, density_order=self.density_order)
-        return solver if self.near_far_cutoff is None else FrozenArraySolver(solver, self.near_far_cutoff)
+def build_solver(options: SolverOptions, flow: Flow, device) -> MobilitySolver | FrozenArraySolver:
+    """The mobility solver of a model's ``options`` (resolved for time stepping) and ``flow``:
+    with ``near_far_cutoff`` the split of frozen adherent arrays around it (``hydro/frozen.py``)."""
+    solver = MobilitySolver(flow.shear_rate, flow.viscosity, flow.wall, device, options.resolved(time_stepping=True))
+    return solver if options.near_far_cutoff is None else FrozenArraySolver(solver, options.near_far_cutoff)
 
 
 @dataclass(frozen=True)
@@ -109,7 +62,8 @@ class StepPolicy:
 class Model:
     """Bodies (``meshes`` in metres about their reference points, ``fixed`` flags, ``names``),
     the ``flow``, the ``interactions`` switched on (``forces``: Gravity, ExternalLoads,
-    Repulsion, ...), solver options, the step policy and the scheme ("euler" or "heun")."""
+    Repulsion, ...), the solver options (their context defaults resolved for time stepping,
+    ``SolverOptions.resolved``), the step policy and the scheme ("euler" or "heun")."""
 
     meshes: tuple
     fixed: tuple
@@ -138,7 +92,8 @@ class Model:
         seen = [x.name for x in interactions]
         if len(set(seen)) != len(seen):
             raise ValueError(f"interaction names must be unique, got {seen}")
-        for name, value in (("meshes", meshes), ("fixed", fixed), ("names", names), ("interactions", interactions)):
+        for name, value in (("meshes", meshes), ("fixed", fixed), ("names", names), ("interactions", interactions),
+                            ("solver", self.solver.resolved(time_stepping=True))):
             object.__setattr__(self, name, value)
 
     @property

@@ -31,7 +31,7 @@ from . import integrate
 from .frame import Frame
 from .hydrodynamics import Hydrodynamics, HydrodynamicSolves
 from .implicit import ImplicitSolveError, ImplicitSystem
-from .model import Model
+from .model import Model, build_solver
 from .state import State
 
 
@@ -130,7 +130,7 @@ class Simulator:
 
     def __init__(self, model: Model, device="cpu"):
         self.model = model
-        self.solver = model.solver.build(model.flow, device)
+        self.solver = build_solver(model.solver, model.flow, device)
         self.hydro = HydrodynamicSolves(model, self.solver)
         self.gaps = GapFinder(device)
         for x in model.interactions:

@@ -129,6 +129,7 @@ import numpy as np
 
 from ..forces.adhesion import compliance, hertz_radius
 from ..forces.interaction import Interaction
+from ..hydro.options import SolverOptions
 from ..hydro.traction import solve_traction
 from ..surfaces.body import rotation_matrix
 from ..surfaces.gaps import WALL
@@ -177,14 +178,14 @@ class Deformation(Interaction):
     ``shear_modulus`` (Pa) and ``poisson_ratio``; ``flow`` the model's ``Flow``; ``relaxation``
     the fluid's resistance to the deformation (False: quasi-static); ``surface_velocity`` the
     flow seeing the surface move with the material; the target re-solved every
-    ``update_interval`` steps."""
+    ``update_interval`` steps; ``solver``: the model's ``SolverOptions``, which the traction and
+    the interior elastic problem take (quadrature, contact refinement, GMRES, operator mode)."""
 
     name = "deformation"
     shapes_bodies = True
 
     def __init__(self, meshes, deformable, shear_modulus, poisson_ratio, flow, *, relaxation: bool = True,
-                 surface_velocity: bool = True, update_interval: int = 1, quadrature_order: int = 2,
-                 contact_refinement: float = 3.0):
+                 surface_velocity: bool = True, update_interval: int = 1, solver: SolverOptions | None = None):
         self.meshes = list(meshes)
         self.deformable = np.asarray(deformable, dtype=bool)
         if len(self.deformable) != len(self.meshes) or not self.deformable.any():
@@ -196,8 +197,7 @@ class Deformation(Interaction):
         self.flow = flow
         self.relaxation, self.update_interval = bool(relaxation), int(update_interval)
         self.surface_velocity = bool(surface_velocity)
-        self.contact_refinement = contact_refinement
-        self.quadrature_order = quadrature_order
+        self.solver = solver or SolverOptions()
         self.shear_modulus, self.poisson_ratio = list(shear_modulus), list(poisson_ratio)
         self.max_nodes = max(len(m.nodes) for m in self.meshes)
         self.radii = [m.equivalent_radius() for m in self.meshes]  # m: the Hertz curvatures, the amplitude scale
@@ -213,7 +213,7 @@ class Deformation(Interaction):
         self.device = device
         # assembled once per cell, in its body frame (they depend on the reference shape only)
         self.elastic = {i: InteriorElasticity(self.meshes[i], self.shear_modulus[i], self.poisson_ratio[i], device,
-                                              quadrature_order=self.quadrature_order)
+                                              options=self.solver)
                         for i in np.flatnonzero(self.deformable)}
         self.weights = {i: nodal_weights(self.meshes[i]) for i in self.elastic}
         self.normals = {i: self._node_normals(self.meshes[i].nodes, i) for i in self.elastic}
@@ -348,8 +348,7 @@ class Deformation(Interaction):
         loaded = {body for body, _, _, _ in spread}
         traction = solve_traction(start_bodies, self.flow.shear_rate, self.flow.viscosity, self.flow.wall,
                                   force, torque, self.device, point_loads=spread,
-                                  load_response=bool(loaded & set(self.elastic)),
-                                  quadrature_order=self.quadrature_order, contact_refinement=self.contact_refinement)
+                                  load_response=bool(loaded & set(self.elastic)), options=self.solver)
         target = np.zeros((len(self.meshes), self.max_nodes, 3))
         contact = np.zeros_like(target)
         for i, elastic in self.elastic.items():

@@ -30,13 +30,11 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy.linalg
-import scipy.sparse.linalg as spla
 
+from ..hydro.deflated import RigidModes, deflated_operator, deflated_solve
 from ..hydro.geometry import SurfaceGeometry
-from ..hydro.linalg import gmres
-from ..hydro.mobility import DEFAULT_TOLERANCE
 from ..hydro.operators import DoubleLayerOperator, QuadratureOptions
+from ..hydro.options import SolverOptions
 from ..surfaces.body import Body
 from ..surfaces.mesh import Mesh
 
@@ -71,20 +69,24 @@ class InteriorElasticity:
     """The elastic operators of a cell's reference mesh (its body frame), assembled once (they
     depend on the shape only: DESIGN.md §3, model no more than a scene needs) and reused for
     every traction and every placement of the cell: ``solve`` takes the traction in the body
-    frame, ``solve_placed`` a world traction on a placed ``Body`` of this mesh."""
+    frame, ``solve_placed`` a world traction on a placed ``Body`` of this mesh. ``options``: the
+    quadrature, precision and GMRES settings (``SolverOptions``); the operators are one cell's,
+    assembled dense whatever the operator mode (a cell's matrix is small and used at every
+    solve), on its own mesh (no contact refinement: the cell is alone in free space)."""
 
     def __init__(self, mesh: Mesh, shear_modulus: float, poisson_ratio: float, device="cpu", *,
-                 quadrature_order: int = 2, dtype: str = "float64", tolerance: float | None = None):
+                 options: SolverOptions | None = None):
         check_material(shear_modulus, poisson_ratio)
         self.shear_modulus, self.poisson_ratio = float(shear_modulus), float(poisson_ratio)
         self.mesh = mesh
         self.length = float(mesh.equivalent_radius())
-        self.geometry = SurfaceGeometry.from_bodies([Body(mesh)], quadrature_order, self.length, False, 0.0)
-        self.tolerance = DEFAULT_TOLERANCE[dtype] if tolerance is None else tolerance
-        quadrature = QuadratureOptions(order=quadrature_order)
+        self.options = (options or SolverOptions()).resolved(time_stepping=True)
+        order = self.options.quadrature_order
+        self.geometry = SurfaceGeometry.from_bodies([Body(mesh)], order, self.length, False, 0.0)
+        quadrature = QuadratureOptions(order=order, adaptive=self.options.adaptive_quadrature)
 
         def matrix(kind):
-            op = DoubleLayerOperator(self.geometry, False, quadrature, dtype, device, "dense", kind=kind)
+            op = DoubleLayerOperator(self.geometry, False, quadrature, self.options.dtype, device, "dense", kind=kind)
             return np.array(op.assemble().numpy(), dtype=np.float64)
 
         nu = self.poisson_ratio
@@ -93,10 +95,9 @@ class InteriorElasticity:
             8 * np.pi * (1 - nu))
         self.single_layer = ((2 - 4 * nu) * matrix("inverse_distance") + 8 * np.pi * matrix("single_layer")) / (
             16 * np.pi * (1 - nu))
-        self.weights = np.repeat(self.geometry.areas, 3)
-        raw = self.geometry.rigid_modes(0)
-        factor = np.linalg.cholesky(raw.T @ (self.weights[:, None] * raw))
-        self.modes = scipy.linalg.solve_triangular(factor, raw.T, lower=True).T
+        # the displacement is defined up to rigid motions: deflated, <phi, u> = 0 (eq. 2.30-2.31)
+        self.system = deflated_operator(lambda u, c: self.double_layer @ u, RigidModes.of(self.geometry), [True],
+                                        non_rigid_part=False)
 
     def solve_placed(self, body: Body, traction) -> Displacement:
         """Displacement (world frame, at the placed collocation points) of ``body`` (this mesh,
@@ -123,12 +124,6 @@ class InteriorElasticity:
         weighted = g.areas[:, None] * t
         imbalance = float(np.abs(weighted.sum(axis=0)).max() / max(np.abs(weighted).sum(), 1e-300))
         rhs = self.single_layer @ (t / self.shear_modulus).ravel()
-
-        def matvec(u):
-            return self.double_layer @ u + self.modes @ (self.modes.T @ (self.weights * u))
-
-        size = 3 * g.n_elements
-        result = gmres(spla.LinearOperator((size, size), matvec=matvec, dtype=float), rhs,
-                       tolerance=self.tolerance)
+        result = deflated_solve(self.system, rhs, self.options)
         return Displacement(result.solution.reshape(-1, 3) * self.length, g.collocation * self.length,
                             result.iterations, result.residual, imbalance)

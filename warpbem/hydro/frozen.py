@@ -79,15 +79,15 @@ class BackgroundField:
         geo = system.geometry
         self.force, self.torque = solution.force, solution.torque
         self.warned = False  # of points beyond the tree
-        self.shear_rate, self.length, self.speed = solver.shear_rate, geo.length_scale, speed
+        self.shear_rate, self.length, self.speed = solver.flow.shear_rate, geo.length_scale, speed
         # the double layer sees the non-rigid part of the density, the completions the loads
         # (CompletedDoubleLayer.matvec)
-        rigid = np.concatenate([system.modes[p] @ system.rigid_coefficients(p, x) for p in range(len(bodies))])
+        rigid = np.concatenate([system.rigid.modes[p] @ system.rigid.coefficients(p, x) for p in range(len(bodies))])
         self.density = x - rigid
         loads = np.concatenate([system.fixed_loads(p, x) for p in range(len(bodies))])
         self.pole_forces = system.pole_forces(loads)
         poles = all_completion_poles(geo)
-        self.operator = DoubleLayerOperator(geo, solver.wall, solver.quadrature, solver.dtype, solver.device,
+        self.operator = DoubleLayerOperator(geo, solver.flow.wall, solver.quadrature, solver.options.dtype, solver.device,
                                             "matrix_free", point_sources=poles)
         self.far = self.values = None
         if geo.n_elements < tree_elements:
@@ -143,16 +143,16 @@ class FrozenArraySolver:
             raise ValueError(f"cutoff must be a finite distance >= 0 (m), got {cutoff!r}")
         self.inner = solver
         self.cutoff = float(cutoff)
-        self.treecode = treecode or solver.treecode
+        self.treecode = treecode or solver.options.treecode
         self.tree_elements = int(tree_elements)
         self.background_field: BackgroundField | None = None
         self._fixed_key = None
         self.near_bodies = np.zeros(0, dtype=int)  # the adherent cells solved in the last call
 
     @property
-    def operator(self) -> str:
+    def operator_description(self) -> str:
         """The near systems' operator, and the split."""
-        return f"{self.inner.operator}, near-far {self.cutoff * 1e6:g} um"
+        return f"{self.inner.operator_description}, near-far {self.cutoff * 1e6:g} um"
 
     def solve(self, bodies, forces=None, torques=None, check_placement_first: bool = True,
               background: bool = True) -> MobilitySolution:
@@ -175,7 +175,7 @@ class FrozenArraySolver:
             force[adherent], torque[adherent] = field.force, field.torque
         if not len(free):
             self.near_bodies = np.zeros(0, dtype=int)
-            return MobilitySolution(velocity, angular_velocity, force, torque, 0, 0.0, True, self.inner.operator,
+            return MobilitySolution(velocity, angular_velocity, force, torque, 0, 0.0, True, self.inner.operator_description,
                                     np.zeros(0), fixed.copy())
         near = self._near(bodies, free, adherent)
         subset = np.concatenate([free, near])

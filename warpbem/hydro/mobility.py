@@ -54,11 +54,10 @@ import scipy.sparse.linalg as spla
 from ..surfaces.body import Body
 from ..surfaces.placement import check_placement
 from ..surfaces.refinement import WALL
+from .deflated import RigidModes, deflated_operator, deflated_solve
 from .geometry import SurfaceGeometry
-from .linalg import gmres
-from .operators import (DENSITY_ORDERS, OPERATOR_MODES, DoubleLayerOperator, QuadratureOptions, choose_operator,
-                        dof_indices)
-from .treecode import TreecodeOptions
+from .operators import DoubleLayerOperator, QuadratureOptions, choose_operator, dof_indices
+from .options import Flow, SolverOptions
 
 
 class ContactResolutionWarning(UserWarning):
@@ -68,17 +67,6 @@ class ContactResolutionWarning(UserWarning):
 FACTOR_LIMIT = 1800  # unknowns (600 elements): largest moving body block factored for GMRES
 FORCE_UNIT = 6.0 * np.pi  # scaled force of a unit-speed unit sphere; scales the load unknowns
 TORQUE_UNIT = 8.0 * np.pi
-# contact refinement ratio by density order when none is given (refinement.py: the ratio on the
-# k = 4 sphere, scaled with the mesh): the Pareto chart's choice (README, benchmarks/pareto.py)
-DEFAULT_CONTACT_REFINEMENT = {1: 3.0, 2: 1.1, 3: 1.1}
-# adaptive quadrature's near_factor by density order: a constant density's error hides the
-# element integrals' from 2 (errors against the exact series unchanged to 3 digits from 3, k = 3
-# to 8, h/a = 1.5 and 1.1; a third less assembly time at 96 elements); a bilinear one's does not
-NEAR_FACTOR = {1: 2.0, 2: 3.0, 3: 3.0}
-# GMRES relative residual by precision when none is given: float32 products carry ~1e-7 of
-# round-off, so 1e-8 is out of their reach (the stability map: 1e-6 converges down to gaps of
-# 0.1 radius)
-DEFAULT_TOLERANCE = {"float64": 1e-8, "float32": 1e-6}
 
 
 @dataclass(frozen=True)
@@ -134,13 +122,6 @@ def checked_loads(name, value, bodies, fixed_allowed: bool = False):
     return arr
 
 
-def _finite(name, value, positive=False):
-    if not np.isscalar(value) or not np.isfinite(value) or (positive and value <= 0):
-        kind = "a positive finite number" if positive else "a finite number"
-        raise ValueError(f"{name} must be {kind}, got {value!r}")
-    return float(value)
-
-
 def non_rigid_part(geometry: SurfaceGeometry, body: int, surface_velocity: np.ndarray) -> np.ndarray:
     """(3 n,) the body's per-element ``surface_velocity`` at its collocation points (refined
     elements take their parent's value) less its rigid part, the least-squares fit of the six
@@ -172,29 +153,21 @@ class CompletedDoubleLayer:
     """The discrete CDL system for the density q (3 E unknowns); for a fixed body the rigid
     part of its density stands for its load (see the module docstring)."""
 
-    def __init__(self, geometry: SurfaceGeometry, operator: DoubleLayerOperator, fixed,
+    def __init__(self, geometry: SurfaceGeometry, double_layer: DoubleLayerOperator, fixed,
                  previous: "CompletedDoubleLayer | None" = None):
         self.geometry = geometry
-        self.operator = operator
+        self.double_layer = double_layer
         self.fixed = np.asarray(fixed, dtype=bool)
         self.fixed_index = np.cumsum(self.fixed) - 1
         self.size = 3 * geometry.n_points
-        self.ranges = [slice(3 * a, 3 * b) for a, b in geometry.body_ranges]
-        self.weights = np.repeat(geometry.areas, 3)
-        self.free_dofs = np.repeat(~self.fixed[geometry.body_of_point], 3).astype(float)
-        self.modes, self.cholesky = [], []
-        for p, rows in enumerate(self.ranges):
-            raw = geometry.rigid_modes(p)
-            factor = np.linalg.cholesky(raw.T @ (self.weights[rows, None] * raw))
-            # Gram-Schmidt: orthonormal modes phi = raw L^-T, <phi_k, phi_l> = delta_kl
-            self.modes.append(scipy.linalg.solve_triangular(factor, raw.T, lower=True).T)
-            self.cholesky.append(factor)
+        self.rigid = RigidModes.of(geometry)  # Gram-Schmidt of each body's rigid fields (deflated.py)
+        self.ranges = self.rigid.ranges
         self.unchanged = geometry.unchanged_bodies(previous.geometry if previous else None)
         self.factors = None  # LU of each body's block (None: not factored), see preconditioner
         self._block_jacobi = None
         # the treecode sums the fixed bodies' completions with the double layer; the dense
         # columns of every fixed body at every point would not fit (1024 cells: 14 GB)
-        self.treecode = operator.mode == "treecode"
+        self.treecode = double_layer.mode == "treecode"
         self.fixed_columns = None if self.treecode else self._fixed_body_columns(previous)
         self.own_columns = {p: self._own_columns(p) for p in np.flatnonzero(self.fixed)}
         # load per unit rigid coefficient: makes <phi_l, V(s_l e_l)> = 1 (rigid block ~ identity)
@@ -202,7 +175,7 @@ class CompletedDoubleLayer:
         for p in np.flatnonzero(self.fixed):
             k = 6 * self.fixed_index[p]
             rows = self.ranges[p]
-            response = self.modes[p].T @ (self.weights[rows, None] * self.own_columns[p])
+            response = self.rigid.modes[p].T @ (self.rigid.weights[rows, None] * self.own_columns[p])
             self.load_per_coefficient[k : k + 6] = 1.0 / np.diag(response)
 
     def _own_columns(self, body: int) -> np.ndarray:
@@ -213,7 +186,7 @@ class CompletedDoubleLayer:
         units = np.diag([FORCE_UNIT] * 3 + [TORQUE_UNIT] * 3)
         poles, point_forces = self.completion(body, units)
         start, stop = self.geometry.body_ranges[body]
-        tensors = self.operator.point_force_tensors(self.geometry.collocation[start:stop], poles)
+        tensors = self.double_layer.point_force_tensors(self.geometry.collocation[start:stop], poles)
         return np.einsum("tpij,lpj->til", tensors, point_forces).reshape(-1, 6)
 
     def completion(self, body: int, loads: np.ndarray):
@@ -245,7 +218,7 @@ class CompletedDoubleLayer:
                 continue
             units = np.diag([FORCE_UNIT] * 3 + [TORQUE_UNIT] * 3)
             poles, point_forces = self.completion(p, units)  # point_forces: (load, pole, 3)
-            tensors = self.operator.point_force_tensors(self.geometry.collocation[targets], poles)
+            tensors = self.double_layer.point_force_tensors(self.geometry.collocation[targets], poles)
             velocity = np.einsum("tpij,lpj->til", tensors, point_forces)
             columns[dof_indices(targets), k : k + 6] = velocity.reshape(-1, 6)
         return columns
@@ -262,25 +235,14 @@ class CompletedDoubleLayer:
                     x0[rows] = solution[3 * a0 : 3 * a1]
         return x0
 
-    def rigid_coefficients(self, body: int, density: np.ndarray) -> np.ndarray:
-        """<phi_p^l, q> for the six orthonormal modes of body p."""
-        rows = self.ranges[body]
-        return self.modes[body].T @ (self.weights[rows] * density[rows])
-
-    def matvec(self, q: np.ndarray) -> np.ndarray:
-        rigid = np.zeros_like(q)
+    def held_loads(self, coefficients: np.ndarray) -> np.ndarray:
+        """Scaled loads of the fixed bodies, in order, from every body's rigid coefficients
+        ((n_bodies, 6)): the fixed ones' carry their loads (module docstring)."""
         loads = np.zeros(len(self.load_per_coefficient))
-        for p, rows in enumerate(self.ranges):
-            coefficients = self.rigid_coefficients(p, q)
-            rigid[rows] = self.modes[p] @ coefficients
-            if self.fixed[p]:
-                k = 6 * self.fixed_index[p]
-                loads[k : k + 6] = coefficients * self.load_per_coefficient[k : k + 6]
-        # (1/2 + D) annihilates rigid fields exactly; apply it to the non-rigid part only, so
-        # the discretisation error of piecewise-constant rotations does not enter the motion
-        if self.treecode:
-            return self.operator.matvec(q - rigid, self.pole_forces(loads)) + rigid * self.free_dofs
-        return self.operator.matvec(q - rigid) + rigid * self.free_dofs + self.fixed_columns @ loads
+        for p in np.flatnonzero(self.fixed):
+            k = 6 * self.fixed_index[p]
+            loads[k : k + 6] = coefficients[p] * self.load_per_coefficient[k : k + 6]
+        return loads
 
     def pole_forces(self, loads: np.ndarray, free_loads: dict | None = None) -> np.ndarray:
         """(7 n_bodies, 3) point forces at every body's completion poles (the operator's
@@ -298,10 +260,19 @@ class CompletedDoubleLayer:
     def fixed_loads(self, body: int, q: np.ndarray) -> np.ndarray:
         """Scaled (F, T) of a fixed body, carried by the rigid part of its density."""
         k = 6 * self.fixed_index[body]
-        return self.rigid_coefficients(body, q) * self.load_per_coefficient[k : k + 6]
+        return self.rigid.coefficients(body, q) * self.load_per_coefficient[k : k + 6]
 
     def linear_operator(self) -> spla.LinearOperator:
-        return spla.LinearOperator((self.size, self.size), matvec=self.matvec, dtype=np.float64)
+        """The deflated CDL system (``deflated.py``): (1/2 + D) annihilates rigid fields exactly,
+        so it is applied to the non-rigid part only (the discretisation error of piecewise-
+        constant rotations then does not enter the motion); free bodies' rigid parts are shifted
+        to themselves, fixed bodies' answer with their completions' velocity. The treecode sums
+        those completions with the double layer."""
+        if self.treecode:
+            return deflated_operator(lambda y, c: self.double_layer.matvec(y, self.pole_forces(self.held_loads(c))),
+                                     self.rigid, ~self.fixed, non_rigid_part=True)
+        return deflated_operator(lambda y, c: self.double_layer.matvec(y), self.rigid, ~self.fixed,
+                                 non_rigid_part=True, response=lambda c: self.fixed_columns @ self.held_loads(c))
 
     def body_block(self, body: int, matrix: np.ndarray) -> np.ndarray:
         """The diagonal block of ``matvec`` for one body's density, from that body's own block
@@ -309,7 +280,8 @@ class CompletedDoubleLayer:
         columns), Pi = Phi Phi^T W, as one rank-6 update in place (each fresh copy of a large
         block cost more than the arithmetic)."""
         rows = self.ranges[body]
-        modes, weighted = self.modes[body], self.modes[body].T * self.weights[rows]  # Pi = modes @ weighted
+        modes = self.rigid.modes[body]
+        weighted = modes.T * self.rigid.weights[rows]  # Pi = modes @ weighted
         if self.fixed[body]:
             k = 6 * self.fixed_index[body]
             added = self.own_columns[body] * self.load_per_coefficient[k : k + 6]
@@ -338,7 +310,7 @@ class CompletedDoubleLayer:
                 for p in range(len(self.ranges))]
         needed = [p for p, rows in enumerate(self.ranges)
                   if not kept[p] and ((self.fixed[p] and kept_for_later) or rows.stop - rows.start <= FACTOR_LIMIT)]
-        blocks = self.operator.diagonal_blocks(needed)
+        blocks = self.double_layer.diagonal_blocks(needed)
         self.factors = [old[p] if kept[p] else
                         scipy.linalg.lu_factor(self.body_block(p, blocks[p]), check_finite=False) if p in blocks else None
                         for p in range(len(self.ranges))]
@@ -362,56 +334,37 @@ class CompletedDoubleLayer:
 
     def rigid_velocity(self, body: int, x: np.ndarray) -> np.ndarray:
         """(U, Omega) of a free body in scaled units: the rigid field -P_p q."""
-        coefficients = self.rigid_coefficients(body, x)
-        return -scipy.linalg.solve_triangular(self.cholesky[body].T, coefficients, lower=False)
+        return -self.rigid.to_raw(body, self.rigid.coefficients(body, x))
 
 
 class MobilitySolver:
     """The mobility problem for a scene solved again and again (time stepping, parameter
-    sweeps): the settings are fixed here; ``solve`` takes the bodies of the moment.
+    sweeps): the flow and the ``options`` (``SolverOptions``, context defaults resolved as for
+    a solve) are fixed here; ``solve`` takes the bodies of the moment.
 
-    Between calls it keeps the operator blocks, and the fixed-body completion columns, of
-    bodies whose elements did not change (fixed adherent cells), and starts GMRES from the
-    previous solution (``reuse=True``). Settings as in ``solve_mobility`` (density_order 2 by
-    default here too; the time-stepping Model keeps 1 unless a scene asks, dynamics/model.py), and
-    ``refine_fixed_at_wall=False``: no contact refinement of fixed bodies for their (unchanging)
-    gap to the wall, which in recruitment scenes costs ~90x per step for a ~1 % effect on the
-    free cells (scenes/recruitment_dome.toml).
+    With ``keep_systems`` it keeps, between calls, the operator blocks and the fixed-body
+    completion columns of bodies whose elements did not change (fixed adherent cells), and
+    starts GMRES from the previous solution. The operator mode "auto" is decided at the first
+    solve, for every later one (``mode``; ``operator_description`` reports it).
     """
 
-    def __init__(self, shear_rate: float = 0.0, viscosity: float = 1e-3, wall: bool = True, device="cpu", *,
-                 quadrature_order: int = 2, adaptive_quadrature: bool = True, tolerance: float | None = None,
-                 max_iterations: int = 600, dtype: str = "float64", operator: str = "auto",
-                 contact_refinement: float | None = None, refine_fixed_at_wall: bool = True, reuse: bool = True,
-                 precondition: bool = True, density_order: int = 2, treecode: TreecodeOptions | None = None):
-        self.shear_rate = _finite("shear_rate", shear_rate)
-        self.viscosity = _finite("viscosity", viscosity, positive=True)
-        self.wall = bool(wall)
+    def __init__(self, shear_rate: float = 0.0, viscosity: float = Flow.viscosity, wall: bool = True, device="cpu",
+                 options: SolverOptions | None = None, *, keep_systems: bool = True):
+        self.flow = Flow(shear_rate, viscosity, wall)
         self.device = device
-        if dtype not in DEFAULT_TOLERANCE:
-            raise ValueError(f"dtype must be one of {sorted(DEFAULT_TOLERANCE)}, got {dtype!r}")
-        self.tolerance = DEFAULT_TOLERANCE[dtype] if tolerance is None else tolerance
-        self.max_iterations = max_iterations
-        self.dtype = dtype
-        if operator not in OPERATOR_MODES:
-            raise ValueError(f"operator mode must be one of {OPERATOR_MODES}, got {operator!r}")
-        self.operator = self.operator_setting = operator  # "auto" is decided at the first solve, for the whole run
-        self.treecode = treecode or TreecodeOptions()
-        if density_order not in DENSITY_ORDERS:
-            raise ValueError(f"density_order must be one of {DENSITY_ORDERS}, got {density_order!r}")
-        self.density_order = int(density_order)
-        self.quadrature = QuadratureOptions(order=quadrature_order, adaptive=bool(adaptive_quadrature),
-                                            near_factor=NEAR_FACTOR[self.density_order])
-        if contact_refinement is None:
-            contact_refinement = DEFAULT_CONTACT_REFINEMENT[self.density_order]
-        self.contact_refinement = _finite("contact_refinement", contact_refinement)
-        if self.contact_refinement < 0:
-            raise ValueError(f"contact_refinement must not be negative, got {contact_refinement!r}")
-        self.refine_fixed_at_wall = bool(refine_fixed_at_wall)
-        self.precondition = bool(precondition)
-        self.reuse = bool(reuse)
+        self.options = (options or SolverOptions()).resolved()
+        self.quadrature = QuadratureOptions(order=self.options.quadrature_order,
+                                            adaptive=self.options.adaptive_quadrature,
+                                            near_factor=self.options.near_factor)
+        self.mode = None if self.options.operator == "auto" else self.options.operator
+        self.keep_systems = bool(keep_systems)
         self._last = None  # (CompletedDoubleLayer, solution vector, speed, bodies key) of the previous solve
         self._warned = set()  # contacts already reported by this solver
+
+    @property
+    def operator_description(self) -> str:
+        """The operator's mode as decided ("auto (not yet decided)" before the first solve)."""
+        return self.mode or "auto (not yet decided)"
 
     def solve(self, bodies, forces=None, torques=None, initial_guess=None,
               check_placement_first: bool = True, background: bool = True, ambient_flow=None) -> MobilitySolution:
@@ -431,40 +384,41 @@ class MobilitySolver:
         forces = checked_loads("forces", forces, bodies)
         torques = checked_loads("torques", torques, bodies)
         if check_placement_first:
-            check_placement(bodies, self.wall)
+            check_placement(bodies, self.flow.wall)
 
         length = float(np.mean([b.mesh.equivalent_radius() for b in bodies]))
         fixed = np.array([b.fixed for b in bodies])
         prescribed = np.array([np.concatenate([b.velocity, b.angular_velocity * length]) for b in bodies])
         slip = [b.surface_velocity for b in bodies] if background else [None] * len(bodies)
-        if self.density_order != 1 and any(v is not None for v in slip):
+        options, flow = self.options, self.flow
+        if options.density_order != 1 and any(v is not None for v in slip):
             raise ValueError("a surface_velocity is given per element, for the constant density: solve it with"
                              " density_order=1 (the deformation model's traction is constant per element too)")
-        speed = max(abs(self.shear_rate) * length, np.abs(forces).max() / (self.viscosity * length),
-                    np.abs(torques).max() / (self.viscosity * length**2), np.abs(prescribed).max(),
+        speed = max(abs(flow.shear_rate) * length, np.abs(forces).max() / (flow.viscosity * length),
+                    np.abs(torques).max() / (flow.viscosity * length**2), np.abs(prescribed).max(),
                     max((np.abs(v).max() for v in slip if v is not None), default=0.0))
         speed = speed if speed > 0 else 1.0
-        force_scale = self.viscosity * speed * length  # N per scaled force unit
+        force_scale = flow.viscosity * speed * length  # N per scaled force unit
 
         if not background:
             prescribed[:] = 0.0
-        previous = self._last[0] if self.reuse and self._last else None
+        previous = self._last[0] if self.keep_systems and self._last else None
         # the meshes themselves, not their ids: the key keeps them alive, so a new mesh can never
         # come back at a garbage-collected one's address and be taken for it
         key = [(b.mesh, b.position.tobytes(), b.orientation.tobytes(), b.fixed) for b in bodies]
         if previous is not None and key == self._last[3]:  # the very same bodies: keep the system
             system = previous
-            geometry, double_layer = system.geometry, system.operator
+            geometry, double_layer = system.geometry, system.double_layer
         else:
-            geometry = SurfaceGeometry.from_bodies(bodies, self.quadrature.order, length, self.wall,
-                                                   self.contact_refinement, self.refine_fixed_at_wall,
-                                                   self.density_order)
+            geometry = SurfaceGeometry.from_bodies(bodies, options.quadrature_order, length, flow.wall,
+                                                   options.contact_refinement, options.refine_fixed_at_wall,
+                                                   options.density_order)
             self._warn_unresolved(geometry, length)
-            if self.operator == "auto":
-                self.operator = choose_operator(3 * geometry.n_points, self.dtype, self.device)
-            double_layer = DoubleLayerOperator(geometry, self.wall, self.quadrature, self.dtype, self.device,
-                                               self.operator, reuse=previous.operator if previous else None,
-                                               treecode=self.treecode, point_sources=all_completion_poles(geometry))
+            if self.mode is None:  # "auto": decided once, for this solve and every later one
+                self.mode = choose_operator(3 * geometry.n_points, options.dtype, self.device)
+            double_layer = DoubleLayerOperator(geometry, flow.wall, self.quadrature, options.dtype, self.device,
+                                               self.mode, reuse=previous.double_layer if previous else None,
+                                               treecode=options.treecode, point_sources=all_completion_poles(geometry))
             system = CompletedDoubleLayer(geometry, double_layer, fixed, previous)
 
         rhs = np.zeros(system.size)
@@ -473,7 +427,7 @@ class MobilitySolver:
         if background and ambient_flow is not None:
             ambient = ambient_flow(xi * length, geometry.body_of_point) / speed
         elif background:
-            ambient[:, 0] = self.shear_rate * length / speed * xi[:, 2]
+            ambient[:, 0] = flow.shear_rate * length / speed * xi[:, 2]
         rhs[:] = -ambient.ravel()
         free_loads = {p: np.concatenate([forces[p] / force_scale, torques[p] / (force_scale * length)])
                       for p in np.flatnonzero(~fixed)}
@@ -496,10 +450,9 @@ class MobilitySolver:
         if initial_guess is None and previous is not None and background:
             # the previous solution is in the previous scaling: rescale the loads part with it
             initial_guess = system.initial_guess(previous, self._last[1] * (self._last[2] / speed))
-        preconditioner = system.preconditioner(previous, self.reuse) if self.precondition else None
-        result = gmres(system.linear_operator(), rhs, tolerance=self.tolerance,
-                       max_iterations=self.max_iterations, initial_guess=initial_guess,
-                       preconditioner=preconditioner, exact_preconditioner=system.preconditioner_is_exact())
+        preconditioner = system.preconditioner(previous, self.keep_systems) if options.precondition else None
+        result = deflated_solve(system.linear_operator(), rhs, options, initial_guess=initial_guess,
+                                preconditioner=preconditioner, exact_preconditioner=system.preconditioner_is_exact())
         x = result.solution
         if background or self._last is None or system is not self._last[0]:
             self._last = (system, x, speed, key)
@@ -525,13 +478,14 @@ class MobilitySolver:
         """A solver with these settings and nothing of this one's solves (no kept system, no
         warnings given, "auto" operator not yet decided)."""
         other = copy.copy(self)
-        other.operator, other._last, other._warned = self.operator_setting, None, set()
+        other.mode = None if self.options.operator == "auto" else self.options.operator
+        other._last, other._warned = None, set()
         return other
 
     @property
     def last_system(self):
         """(CompletedDoubleLayer, scaled solution, velocity scale in m/s) of the last ordinary
-        solve (``reuse=True``), or None: the density a caller evaluates elsewhere (``frozen.py``)."""
+        solve (``keep_systems``), or None: the density a caller evaluates elsewhere (``frozen.py``)."""
         return None if self._last is None else self._last[:3]
 
     def _warn_unresolved(self, geometry, length):
@@ -544,56 +498,27 @@ class MobilitySolver:
             what = "the wall" if q == WALL else f"body {q}"
             warnings.warn(
                 f"body {p} and {what} are {gap * length:.3g} m apart ({gap:.3g} mean radii), closer than"
-                f" the mesh resolves (contact_refinement={self.contact_refinement:g}): the gap to the wall, or"
+                f" the mesh resolves (contact_refinement={self.options.contact_refinement:g}): the gap to the wall, or"
                 " the gap to another body (half of it with density_order 2), is under 2 % of the body's"
                 " element radius, or under three"
                 " element radii without refinement, or the refinement stopped at its deepest level."
                 " Squeeze-flow forces lose accuracy first, past about 1 % (README: stability map); a finer"
                 " mesh helps."
-                + (" In float32, GMRES stalls from about here: use dtype='float64'." if self.dtype == "float32" else ""),
+                + (" In float32, GMRES stalls from about here: use dtype='float64'." if self.options.dtype == "float32" else ""),
                 ContactResolutionWarning, stacklevel=3)
 
 
-def solve_mobility(
-    bodies,
-    shear_rate: float = 0.0,
-    viscosity: float = 1e-3,
-    wall: bool = True,
-    forces=None,
-    torques=None,
-    device="cpu",
-    *,
-    quadrature_order: int = 2,
-    adaptive_quadrature: bool = True,
-    tolerance: float | None = None,
-    max_iterations: int = 600,
-    dtype: str = "float64",
-    operator: str = "auto",
-    initial_guess=None,
-    contact_refinement: float | None = None,
-    density_order: int = 2,
-    treecode: TreecodeOptions | None = None,
-) -> MobilitySolution:
+def solve_mobility(bodies, shear_rate: float = 0.0, viscosity: float = Flow.viscosity, wall: bool = True,
+                   forces=None, torques=None, device="cpu", *, options: SolverOptions | None = None,
+                   initial_guess=None) -> MobilitySolution:
     """Rigid velocities of free bodies and holding loads of fixed ones (SI units), one solve.
 
     bodies: list of ``Body``; shear_rate (1/s) of u = shear_rate * z e_x; viscosity (Pa s);
     wall: no-slip plane z = 0 (else unbounded); forces, torques: (n_bodies, 3) external loads
-    on free bodies (N, N m), zero rows for fixed ones. quadrature_order: Gauss points per
-    direction; adaptive_quadrature: subdivide nearly singular elements; tolerance: GMRES
-    relative residual (default by dtype: 1e-8 for float64, 1e-6 for float32); dtype:
-    "float64" or "float32" kernels; operator: "dense", "matrix_free" (the direct sum), "treecode"
-    (the far field by interpolation, ``treecode``: its TreecodeOptions, hydro/treecode.py) or
-    "auto" (``operators.choose_operator``); initial_guess: a previous solution's ``solution_vector``;
-    contact_refinement: split elements nearer than 1/ratio of their radius to the wall or
-    another body (0: never), the ratio on the k = 4 sphere, scaled with the mesh
-    (surfaces/refinement.py); None: 1.1 with density_order 2, 3.0 with 1; density_order: 2
-    (default, chosen from the Pareto chart, README "Accuracy per cost"), the density bilinear
-    on 2 x 2 points per element, or 1, constant per element (the seed's scheme), or 3. For
-    repeated solves use ``MobilitySolver``.
+    on free bodies (N, N m), zero rows for fixed ones; options: ``SolverOptions`` (quadrature,
+    density order, contact refinement, GMRES tolerance, precision, operator mode; each field
+    documented there, defaults resolved for a solve); initial_guess: a previous solution's
+    ``solution_vector``. For repeated solves use ``MobilitySolver``.
     """
-    solver = MobilitySolver(shear_rate, viscosity, wall, device, quadrature_order=quadrature_order,
-                            adaptive_quadrature=adaptive_quadrature, tolerance=tolerance,
-                            max_iterations=max_iterations, dtype=dtype, operator=operator,
-                            contact_refinement=contact_refinement, reuse=False, density_order=density_order,
-                            treecode=treecode)
+    solver = MobilitySolver(shear_rate, viscosity, wall, device, options, keep_systems=False)
     return solver.solve(bodies, forces, torques, initial_guess)

@@ -53,14 +53,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg
-import scipy.sparse.linalg as spla
 
 from ..surfaces.placement import check_placement
+from .deflated import RigidModes, deflated_operator, deflated_solve
 from .geometry import SurfaceGeometry
-from .linalg import gmres
-from .mobility import DEFAULT_TOLERANCE, _finite, checked_loads, checked_bodies
+from .mobility import checked_loads, checked_bodies
 from .operators import DoubleLayerOperator, QuadratureOptions
+from .options import Flow, SolverOptions
 
 
 @dataclass(frozen=True)
@@ -151,11 +150,9 @@ def spread_point_loads(geometry, length: float, point_loads, n_bodies: int) -> n
     return extra
 
 
-def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wall: bool = True,
+def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = Flow.viscosity, wall: bool = True,
                    forces=None, torques=None, device="cpu", *, extra_traction=None, point_loads=(),
-                   load_response: bool = False, quadrature_order: int = 2,
-                   tolerance: float | None = None, max_iterations: int = 600, dtype: str = "float64",
-                   operator: str = "auto", contact_refinement: float = 3.0) -> TractionSolution:
+                   load_response: bool = False, options: SolverOptions | None = None) -> TractionSolution:
     """Traction on every rigid body (SI units) in the flow u = shear_rate z e_x (Pa s viscosity,
     no-slip wall z = 0 when ``wall``), given each body's external load ``forces``, ``torques``
     ((n, 3) N, N m, as ``MobilitySolution.force/torque``: for a free body the loads applied to
@@ -165,20 +162,24 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wal
     the collocation points and their unit normals ((E, 3) each, m) that returns one;
     ``point_loads``: (body, point (m), force (N), contact radius (m)) each, spread as the module
     docstring says (neither in ``forces``); ``load_response``: also solve the loads without the
-    flow (``load_traction``). Options as for ``solve_mobility``."""
+    flow (``load_traction``). ``options``: the ``SolverOptions`` of the solve (quadrature,
+    contact refinement, GMRES, precision, operator mode); the traction is constant per element,
+    so its density order is 1 (the contact refinement's default follows it)."""
     bodies = checked_bodies(bodies)
-    shear_rate = _finite("shear_rate", shear_rate)
-    viscosity = _finite("viscosity", viscosity, positive=True)
-    if dtype not in DEFAULT_TOLERANCE:
-        raise ValueError(f"dtype must be one of {sorted(DEFAULT_TOLERANCE)}, got {dtype!r}")
+    flow = Flow(shear_rate, viscosity, wall)
+    shear_rate, viscosity = flow.shear_rate, flow.viscosity
+    options = options or SolverOptions()
+    if options.density_order not in (None, 1):
+        raise ValueError(f"the traction is constant per element (density_order 1), got density_order"
+                         f" {options.density_order}")
+    options = options.resolved(time_stepping=True)
     fluid_force = -checked_loads("forces", forces, bodies, fixed_allowed=True)
     fluid_torque = -checked_loads("torques", torques, bodies, fixed_allowed=True)
     check_placement(bodies, wall)
 
     length = float(np.mean([b.mesh.equivalent_radius() for b in bodies]))
-    geometry = SurfaceGeometry.from_bodies(bodies, quadrature_order, length, wall, contact_refinement)
-    weights = np.repeat(geometry.areas, 3)
-    ranges = [slice(3 * a, 3 * b) for a, b in geometry.body_ranges]
+    geometry = SurfaceGeometry.from_bodies(bodies, options.quadrature_order, length, wall, options.contact_refinement,
+                                           options.refine_fixed_at_wall)
     if callable(extra_traction):
         extra_traction = extra_traction(geometry.collocation * length, geometry.collocation_normals)
     extra = np.zeros((geometry.n_elements, 3)) if extra_traction is None else np.asarray(extra_traction, dtype=float)
@@ -193,35 +194,26 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = 1e-3, wal
     scale = max(viscosity * abs(shear_rate), np.abs(fluid_force).max() / length**2,
                 np.abs(fluid_torque).max() / length**3)
     scale = scale if scale > 0 else 1.0
-    adjoint = DoubleLayerOperator(geometry, wall, QuadratureOptions(order=quadrature_order), dtype, device,
-                                  operator, kind="adjoint_double_layer")
+    quadrature = QuadratureOptions(order=options.quadrature_order, adaptive=options.adaptive_quadrature)
+    adjoint = DoubleLayerOperator(geometry, wall, quadrature, options.dtype, device,
+                                  options.operator, kind="adjoint_double_layer")
     # the right side in two parts, scaled: the ambient traction sigma_inf . n, and the rigid
     # modes' loads (the loads acting alone, without the flow: ``load_response``)
     normals = geometry.collocation_normals
     ambient = (viscosity * shear_rate / scale * np.stack([normals[:, 2], np.zeros(len(normals)), normals[:, 0]],
                                                           axis=1)).ravel()
-    modes, loads_rhs = [], np.zeros(3 * geometry.n_elements)
-    for p, rows in enumerate(ranges):
-        raw = geometry.rigid_modes(p)
-        factor = np.linalg.cholesky(raw.T @ (weights[rows, None] * raw))
-        phi = scipy.linalg.solve_triangular(factor, raw.T, lower=True).T  # <phi_k, phi_l> = delta_kl
-        modes.append(phi)
+    rigid = RigidModes.of(geometry)
+    loads_rhs = np.zeros(3 * geometry.n_elements)
+    for p, rows in enumerate(rigid.ranges):
         loads = np.concatenate([fluid_force[p] / (scale * length**2), fluid_torque[p] / (scale * length**3)])
-        loads_rhs[rows] = phi @ scipy.linalg.solve_triangular(factor, loads, lower=True)
-
-    def matvec(t):
-        out = adjoint.matvec(t)
-        for phi, rows in zip(modes, ranges):
-            out[rows] += phi @ (phi.T @ (weights[rows] * t[rows]))
-        return out
-
-    size = 3 * geometry.n_elements
-    system = spla.LinearOperator((size, size), matvec=matvec, dtype=float)
-    tolerance = DEFAULT_TOLERANCE[dtype] if tolerance is None else tolerance
-    result = gmres(system, ambient + loads_rhs, tolerance=tolerance, max_iterations=max_iterations)
+        loads_rhs[rows] = rigid.modes[p] @ rigid.dual_of_loads(p, loads)
+    # only the -1 eigenvalue of D* needs the deflation (module docstring): every body shifted
+    system = deflated_operator(lambda t, c: adjoint.matvec(t), rigid, np.ones(len(bodies), bool),
+                               non_rigid_part=False)
+    result = deflated_solve(system, ambient + loads_rhs, options)
     alone = None
     if load_response:
-        response = gmres(system, loads_rhs, tolerance=tolerance, max_iterations=max_iterations)
+        response = deflated_solve(system, loads_rhs, options)
         alone = response.solution.reshape(-1, 3) * scale + extra
     traction = result.solution.reshape(-1, 3) * scale
     areas = geometry.areas * length**2

@@ -1,0 +1,111 @@
+"""The flow and the solver settings, declared once (``warpbem.options``): the mobility solve
+(``mobility.py``), the traction (``traction.py``) and the interior elastic problem
+(``elastic/interior.py``) take one ``SolverOptions``; the time step reads its snapshot and
+near-far settings from the same object; scenes read both from ``[flow]`` and ``[solver]``.
+
+Defaults that depend on the context are ``None`` and resolved by ``SolverOptions.resolved``:
+the density order (2 for a solve, 1 for a time-stepped model: why in its doc), the contact
+refinement by the density order, the GMRES tolerance by the precision.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from ..options import OptionError, option, validate
+from .treecode import TreecodeOptions
+
+OPERATOR_MODES = ("auto", "dense", "matrix_free", "treecode")
+# contact refinement ratio by density order when none is given (surfaces/refinement.py: the
+# ratio on the k = 4 sphere, scaled with the mesh): the Pareto chart's choice (README,
+# benchmarks/pareto.py)
+DEFAULT_CONTACT_REFINEMENT = {1: 3.0, 2: 1.1, 3: 1.1}
+# adaptive quadrature's near_factor by density order: a constant density's error hides the
+# element integrals' from 2 (errors against the exact series unchanged to 3 digits from 3, k = 3
+# to 8, h/a = 1.5 and 1.1); a bilinear one's does not
+NEAR_FACTOR = {1: 2.0, 2: 3.0, 3: 3.0}
+# GMRES relative residual by precision when none is given: float32 products carry ~1e-7 of
+# round-off, so 1e-8 is out of their reach (the stability map: 1e-6 converges down to gaps of
+# 0.1 radius)
+DEFAULT_TOLERANCE = {"float64": 1e-8, "float32": 1e-6}
+# the density order of a solve, and of a time-stepped model (SolverOptions.density_order)
+SOLVE_DENSITY_ORDER = 2
+TIME_STEPPING_DENSITY_ORDER = 1
+
+
+@dataclass(frozen=True)
+class Flow:
+    """Undisturbed flow u = shear_rate z e_x above the no-slip wall z = 0 (if ``wall``)."""
+
+    shear_rate: float = option(0.0, "shear rate of the undisturbed flow u = shear_rate z e_x", "1/s",
+                               low=-1e6, high=1e6)
+    viscosity: float = option(1.2e-3, "fluid viscosity (plasma, thesis ch. 3-5: 1.2e-3)", "Pa s",
+                              low=0.0, high=1e3, low_open=True)
+    wall: bool = option(True, "a no-slip plane wall at z = 0 (Blake images; false: unbounded fluid)")
+
+    def __post_init__(self):
+        validate(self)
+
+
+@dataclass(frozen=True)
+class SolverOptions:
+    """Settings of the boundary-element solves and of how the time step reuses them."""
+
+    quadrature_order: int = option(2, "Gauss points per direction on an element and on each adaptive sub-panel"
+                                   " (2 x 2 reaches the seed's 3 x 3 accuracy at 60 % of the cost:"
+                                   " benchmarks/pareto.py)", low=1, high=10)
+    adaptive_quadrature: bool = option(True, "subdivide nearly singular element integrals (near a collocation"
+                                       " point or its wall image)")
+    density_order: int | None = option(
+        None, "double-layer density per element: 1 constant (the seed's), 2 bilinear, 3 biquadratic. Default: 2"
+        " for a solve (solve_mobility, MobilitySolver: below the constant density's cost-accuracy curve from"
+        " 0.01-0.05 s per solve, README 'Accuracy per cost'); 1 in time-stepped models and scenes, whose"
+        " deformable cells' traction and surface motion are per element (1 only) and whose published figures"
+        " were measured with it", kind=int, low=1, high=3)
+    contact_refinement: float | None = option(
+        None, "split elements nearer than 1/ratio of their radius to the wall or another body (0: never); the ratio"
+        " on the k = 4 sphere, scaled with the mesh. Default by density order: 3.0 for 1, 1.1 for 2 and 3",
+        kind=float, low=0.0, high=20.0)
+    refine_fixed_at_wall: bool = option(True, "refine fixed bodies for their own gap to the wall (false: a ~1 %"
+                                        " effect on free cells in recruitment scenes at ~1/90 of the cost)")
+    tolerance: float | None = option(None, "GMRES relative residual. Default by dtype: 1e-8 for float64, 1e-6 for"
+                                     " float32", kind=float, low=0.0, high=0.1, low_open=True)
+    max_iterations: int = option(600, "GMRES iterations before a ConvergenceError", low=1, high=1e6)
+    dtype: str = option("float64", "precision of the Warp kernels", choices=("float64", "float32"))
+    operator: str = option("auto", "discrete form of the operator: dense, matrix_free (the direct sum), treecode,"
+                           " or auto (dense while one matrix takes at most a quarter of the device's memory)",
+                           choices=OPERATOR_MODES)
+    precondition: bool = option(True, "block-Jacobi preconditioner (each body's own block, LU)")
+    reuse_tolerance: float = option(0.0, "mobility snapshots reused across time steps on a lattice of this"
+                                    " spacing in height (dynamics/hydrodynamics.py); 0 solves every state."
+                                    " Scenes with adhesion default to 2e-9 (benchmarks/adhesion.py)", "m",
+                                    low=0.0, high=1e-6)
+    reuse_lateral: float | None = option(None, "lateral lattice of the several-body snapshots. Default: 50 x"
+                                         " reuse_tolerance", "m", kind=float, low=0.0, high=1e-5, low_open=True)
+    reuse_interaction: float | None = option(None, "height lattice of the several-body snapshots, >= reuse_tolerance."
+                                             " Default: 10 x reuse_tolerance", "m", kind=float, low=0.0, high=1e-6,
+                                             low_open=True)
+    near_far_cutoff: float | None = option(None, "adherent cells whose bounding sphere stays farther than this from"
+                                           " every free cell's keep the background solved once (hydro/frozen.py;"
+                                           " README 'Frozen adherent arrays'). Default: every solve holds every"
+                                           " body", "m", kind=float, low=0.0, high=1e-2)
+    treecode: TreecodeOptions = TreecodeOptions()  # the far field's settings (API only, not a scene key)
+
+    def __post_init__(self):
+        validate(self)
+        if self.reuse_interaction is not None and not self.reuse_interaction >= self.reuse_tolerance > 0:
+            raise OptionError(f"reuse_interaction: {self.reuse_interaction:g} is outside the allowed range"
+                              f" [{max(self.reuse_tolerance, 1e-12):g}, 1e-06] (>= reuse_tolerance > 0)")
+
+    def resolved(self, time_stepping: bool = False) -> "SolverOptions":
+        """These options with the context defaults filled in (module docstring)."""
+        order = self.density_order or (TIME_STEPPING_DENSITY_ORDER if time_stepping else SOLVE_DENSITY_ORDER)
+        refinement = DEFAULT_CONTACT_REFINEMENT[order] if self.contact_refinement is None else self.contact_refinement
+        tolerance = DEFAULT_TOLERANCE[self.dtype] if self.tolerance is None else self.tolerance
+        return dataclasses.replace(self, density_order=order, contact_refinement=refinement, tolerance=tolerance)
+
+    @property
+    def near_factor(self) -> float:
+        """The adaptive quadrature's subdivision distance in panel radii, by density order."""
+        return NEAR_FACTOR[self.density_order or SOLVE_DENSITY_ORDER]

@@ -1,0 +1,123 @@
+"""Options declared once: each setting is a field of a frozen dataclass whose metadata holds
+its unit, allowed range (or choices) and one line of doc (``option``). From that one
+declaration come
+
+* the checks when the dataclass is made (``validate``, called from ``__post_init__``), with
+  messages that name the field and the allowed range;
+* the scene parser's reading of a TOML table (``from_table``), whose messages name the field by
+  its dotted scene key (``flow.viscosity``);
+* the scene-file reference (``reference_rows``, ``warpbem.app.reference``).
+
+A default that depends on the context (``None`` resolved elsewhere, e.g. the GMRES tolerance by
+the precision) says so in its doc and is resolved in one named place.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+
+class OptionError(ValueError):
+    """A value outside what its option allows; the message names the option."""
+
+
+@dataclass(frozen=True)
+class Spec:
+    """What an option allows: ``kind`` (float, int, bool, str or "vector3", "vector4"), a range
+    [low, high] (``low_open``/``high_open``: excluded), ``choices`` for strings, ``optional``:
+    None allowed (its meaning in ``doc``); ``unit`` (SI) and ``doc`` for the reference."""
+
+    kind: object
+    doc: str
+    unit: str = "1"
+    low: float = -math.inf
+    high: float = math.inf
+    low_open: bool = False
+    high_open: bool = False
+    choices: tuple = ()
+    optional: bool = False
+
+    def range_text(self) -> str:
+        if self.choices:
+            return ", ".join(repr(c) for c in self.choices)
+        if self.kind in (bool, str) or (self.low == -math.inf and self.high == math.inf):
+            return ""
+        return f"{'(' if self.low_open else '['}{self.low:g}, {self.high:g}{')' if self.high_open else ']'}"
+
+
+def option(default, doc: str, unit: str = "1", *, kind=None, low=-math.inf, high=math.inf, low_open=False,
+           high_open=False, choices=(), optional=None):
+    """A dataclass field declared with its ``Spec`` (kind from the default unless given)."""
+    kind = kind or type(default)
+    optional = default is None if optional is None else optional
+    spec = Spec(kind, doc, unit, low, high, low_open, high_open, tuple(choices), optional)
+    return dataclasses.field(default=default, metadata={"option": spec})
+
+
+def declared(cls) -> list[tuple[str, object, Spec]]:
+    """(name, default, Spec) of each declared option of a dataclass, in field order."""
+    return [(f.name, f.default, f.metadata["option"]) for f in dataclasses.fields(cls) if "option" in f.metadata]
+
+
+def check(where: str, spec: Spec, value):
+    """``value`` checked against ``spec`` (and converted: ints stay ints, vectors become tuples);
+    OptionError naming ``where`` otherwise."""
+    if value is None and spec.optional:
+        return None
+    if spec.kind is bool:
+        if not isinstance(value, bool):
+            raise OptionError(f"{where}: expected true or false, got {value!r}")
+        return value
+    if spec.kind is str:
+        if value not in spec.choices:
+            raise OptionError(f"{where}: {value!r} is not one of {spec.range_text()}")
+        return value
+    if spec.kind in ("vector3", "vector4"):
+        length = int(spec.kind[-1])
+        if not isinstance(value, (list, tuple)) or len(value) != length:
+            raise OptionError(f"{where}: expected a list of {length} numbers, got {value!r}")
+        return tuple(check(f"{where}[{i}]", Spec(float, spec.doc), v) for i, v in enumerate(value))
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise OptionError(f"{where}: expected a finite number, got {value!r}")
+    if spec.kind is int and int(value) != value:
+        raise OptionError(f"{where}: expected an integer, got {value!r}")
+    if (value < spec.low or value > spec.high or (spec.low_open and value == spec.low)
+            or (spec.high_open and value == spec.high)):
+        raise OptionError(f"{where}: {value:g} is outside the allowed range {spec.range_text()}")
+    return int(value) if spec.kind is int else float(value)
+
+
+def validate(instance, where: str = "") -> None:
+    """Check (and convert in place) every declared option of a frozen dataclass instance; call
+    from ``__post_init__``. ``where``: the prefix of the names in the messages."""
+    for name, _, spec in declared(type(instance)):
+        value = check(f"{where}{name}", spec, getattr(instance, name))
+        object.__setattr__(instance, name, value)
+
+
+def from_table(cls, table: dict, where: str, **given):
+    """An instance of ``cls`` from a scene table: each key a declared option, checked with its
+    dotted name ``where.key``; keys absent take their declared default; ``given``: fields set by
+    the caller (not scene keys). Unknown keys are refused with the allowed ones listed."""
+    names = {name: spec for name, _, spec in declared(cls)}
+    if not isinstance(table, dict):
+        raise OptionError(f"{where}: expected a table, got {table!r}")
+    unknown = sorted(set(table) - set(names))
+    if unknown:
+        raise OptionError(f"{where}: unknown key {unknown[0]!r}; allowed keys: {', '.join(sorted(names))}")
+    values = {key: check(f"{where}.{key}", names[key], value) for key, value in table.items()}
+    try:
+        return cls(**values, **given)
+    except OptionError as err:  # a check across fields: name it by the scene's prefix
+        raise OptionError(f"{where}.{err}") from err
+
+
+def reference_rows(cls, section: str) -> list[str]:
+    """Markdown table rows ``| key | unit | default | allowed | meaning |`` of ``cls``'s options."""
+    rows = []
+    for name, default, spec in declared(cls):
+        shown = "-" if default is None else (str(default).lower() if isinstance(default, bool) else repr(default))
+        rows.append(f"| `{section}.{name}` | {spec.unit} | {shown} | {spec.range_text() or '-'} | {spec.doc} |")
+    return rows
