@@ -37,7 +37,7 @@ import warpbem as wb
 from common import arguments, output, print_table, pyplot, save_chart, write_csv
 from warpbem.dynamics import Flow, Model, Simulator, StepPolicy
 from warpbem.elastic import deformable, interior
-from warpbem.elastic.deformable import Deformation
+from warpbem.elastic.deformable import Deformation, DeformationOptions
 
 warnings.simplefilter("ignore", wb.ContactResolutionWarning)
 A, MU, SHEAR, NU = 5e-6, 1e-3, 100.0, 0.33
@@ -51,7 +51,7 @@ def roscoe(ca):
 def cell(k, modulus, dt, wall, device, *, height=0.0, rigid=False, **options):
     mesh = wb.mesh.sphere(A, k)
     flow = Flow(SHEAR, MU, wall)
-    shape = [] if rigid else [Deformation([mesh], [True], [modulus], [NU], flow, **options)]
+    shape = [] if rigid else [Deformation([mesh], [True], [modulus], [NU], flow, DeformationOptions(**options))]
     model = Model([mesh], [False], flow, policy=StepPolicy(dt, 1e-7, 1e-9), scheme="euler", interactions=shape)
     return Simulator(model, device), model.initial_state([[0.0, 0.0, height]])
 

@@ -25,9 +25,10 @@ class OptionError(ValueError):
 
 @dataclass(frozen=True)
 class Spec:
-    """What an option allows: ``kind`` (float, int, bool, str or "vector3", "vector4"), a range
-    [low, high] (``low_open``/``high_open``: excluded), ``choices`` for strings, ``optional``:
-    None allowed (its meaning in ``doc``); ``unit`` (SI) and ``doc`` for the reference."""
+    """What an option allows: ``kind`` (float, int, bool or str; with ``length`` > 0 a list of
+    that many), a range [low, high] (``low_open``/``high_open``: excluded; of each item of a
+    list), ``choices`` for strings (none: any string), ``optional``: None allowed (its meaning
+    in ``doc``); ``unit`` (SI) and ``doc`` for the reference."""
 
     kind: object
     doc: str
@@ -38,21 +39,24 @@ class Spec:
     high_open: bool = False
     choices: tuple = ()
     optional: bool = False
+    length: int = 0
 
     def range_text(self) -> str:
         if self.choices:
             return ", ".join(repr(c) for c in self.choices)
+        items = f"{self.length} {'integers' if self.kind is int else 'numbers'}" if self.length else ""
         if self.kind in (bool, str) or (self.low == -math.inf and self.high == math.inf):
-            return ""
-        return f"{'(' if self.low_open else '['}{self.low:g}, {self.high:g}{')' if self.high_open else ']'}"
+            return items
+        bounds = f"{'(' if self.low_open else '['}{self.low:g}, {self.high:g}{')' if self.high_open else ']'}"
+        return f"{items}, each in {bounds}" if items else bounds
 
 
 def option(default, doc: str, unit: str = "1", *, kind=None, low=-math.inf, high=math.inf, low_open=False,
-           high_open=False, choices=(), optional=None):
+           high_open=False, choices=(), optional=None, length=0):
     """A dataclass field declared with its ``Spec`` (kind from the default unless given)."""
     kind = kind or type(default)
     optional = default is None if optional is None else optional
-    spec = Spec(kind, doc, unit, low, high, low_open, high_open, tuple(choices), optional)
+    spec = Spec(kind, doc, unit, low, high, low_open, high_open, tuple(choices), optional, length)
     return dataclasses.field(default=default, metadata={"option": spec})
 
 
@@ -70,15 +74,17 @@ def check(where: str, spec: Spec, value):
         if not isinstance(value, bool):
             raise OptionError(f"{where}: expected true or false, got {value!r}")
         return value
+    if spec.length:
+        if not isinstance(value, (list, tuple)) or len(value) != spec.length:
+            items = "integers" if spec.kind is int else "numbers"
+            raise OptionError(f"{where}: expected a list of {spec.length} {items}, got {value!r}")
+        item = dataclasses.replace(spec, length=0, optional=False)
+        return tuple(check(f"{where}[{i}]", item, v) for i, v in enumerate(value))
     if spec.kind is str:
-        if value not in spec.choices:
-            raise OptionError(f"{where}: {value!r} is not one of {spec.range_text()}")
+        if not isinstance(value, str) or (spec.choices and value not in spec.choices):
+            raise OptionError(f"{where}: {value!r} is not one of {spec.range_text()}" if spec.choices
+                              else f"{where}: expected a string, got {value!r}")
         return value
-    if spec.kind in ("vector3", "vector4"):
-        length = int(spec.kind[-1])
-        if not isinstance(value, (list, tuple)) or len(value) != length:
-            raise OptionError(f"{where}: expected a list of {length} numbers, got {value!r}")
-        return tuple(check(f"{where}[{i}]", Spec(float, spec.doc), v) for i, v in enumerate(value))
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise OptionError(f"{where}: expected a finite number, got {value!r}")
     if spec.kind is int and int(value) != value:
@@ -97,16 +103,26 @@ def validate(instance, where: str = "") -> None:
         object.__setattr__(instance, name, value)
 
 
-def from_table(cls, table: dict, where: str, **given):
-    """An instance of ``cls`` from a scene table: each key a declared option, checked with its
-    dotted name ``where.key``; keys absent take their declared default; ``given``: fields set by
-    the caller (not scene keys). Unknown keys are refused with the allowed ones listed."""
-    names = {name: spec for name, _, spec in declared(cls)}
+def check_keys(where: str, table, allowed, required=()) -> dict:
+    """``table`` is a table (dict) with only ``allowed`` keys and every ``required`` one."""
     if not isinstance(table, dict):
         raise OptionError(f"{where}: expected a table, got {table!r}")
-    unknown = sorted(set(table) - set(names))
+    unknown = sorted(set(table) - set(allowed))
     if unknown:
-        raise OptionError(f"{where}: unknown key {unknown[0]!r}; allowed keys: {', '.join(sorted(names))}")
+        raise OptionError(f"{where}: unknown key {unknown[0]!r}; allowed keys: {', '.join(sorted(allowed))}")
+    missing = [k for k in required if k not in table]
+    if missing:
+        raise OptionError(f"{where}: missing required key {missing[0]!r}")
+    return table
+
+
+def from_table(cls, table: dict, where: str, required=(), **given):
+    """An instance of ``cls`` from a scene table: each key a declared option, checked with its
+    dotted name ``where.key``; keys absent take their declared default; ``required``: keys that
+    must be given; ``given``: fields set by the caller (not scene keys). Unknown keys are
+    refused with the allowed ones listed."""
+    names = {name: spec for name, _, spec in declared(cls)}
+    check_keys(where, table, names, required)
     values = {key: check(f"{where}.{key}", names[key], value) for key, value in table.items()}
     try:
         return cls(**values, **given)
@@ -118,6 +134,7 @@ def reference_rows(cls, section: str) -> list[str]:
     """Markdown table rows ``| key | unit | default | allowed | meaning |`` of ``cls``'s options."""
     rows = []
     for name, default, spec in declared(cls):
-        shown = "-" if default is None else (str(default).lower() if isinstance(default, bool) else repr(default))
+        shown = "-" if default is None else (str(default).lower() if isinstance(default, bool) else
+                                             repr(list(default)) if isinstance(default, tuple) else repr(default))
         rows.append(f"| `{section}.{name}` | {spec.unit} | {shown} | {spec.range_text() or '-'} | {spec.doc} |")
     return rows

@@ -8,7 +8,7 @@ import pytest
 
 import warpbem as wb
 from warpbem.app import scene
-from warpbem.forces.adhesion import BOLTZMANN, Adhesion, contact_traction, hertz_contact_radius
+from warpbem.forces.adhesion import BOLTZMANN, Adhesion, BondOptions, contact_traction, hertz_contact_radius
 from warpbem.surfaces.body import Body
 from warpbem.surfaces.gaps import Contacts, GapFinder
 from tests.scene_points import sweep_scenes
@@ -26,7 +26,7 @@ TABLE_4_1 = dict(receptor_density=20e12, spring_constant=5e-4, equilibrium_lengt
 
 
 def adhesion(**changes):
-    return Adhesion([MESH], [False], **{**TABLE_4_1, **changes})
+    return Adhesion([MESH], [False], BondOptions(**{**TABLE_4_1, **changes}))
 
 
 def test_receptors_are_microvillus_tips_spread_by_area():

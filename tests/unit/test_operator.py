@@ -97,7 +97,7 @@ def test_cdl_spectrum_lies_in_the_right_half_plane():
     bodies = [Body(mesh.sphere(1.0, 2), position=(0, 0, 1.3))]
     op = make_operator(bodies, True)
     system = CompletedDoubleLayer(op.geometry, op, [False])
-    matrix = np.array([system.matvec(e) for e in np.eye(system.size)]).T
+    matrix = np.array([system.linear_operator().matvec(e) for e in np.eye(system.size)]).T
     eig = np.linalg.eigvals(matrix)
     assert eig.real.min() > 0.05
     assert eig.real.max() < 1.0 + 1e-6

@@ -60,7 +60,7 @@ def test_arrays_expand_into_named_bodies_on_their_grid_sharing_one_mesh(tmp_path
 
 @pytest.mark.parametrize("change, message", [
     (lambda a: a.update(count=[0, 2]), r"arrays.0.count\[0\]: 0 is outside the allowed range"),
-    (lambda a: a.update(count=4), r"arrays.0.count: expected \[nx, ny\]"),
+    (lambda a: a.update(count=4), r"arrays.0.count: expected a list of 2 integers"),
     (lambda a: a.update(position=[0.0, 0.0, 1e-5]), r"arrays.0: unknown key 'position'"),
     (lambda a: a.pop("pitch"), r"arrays.0: missing required key 'pitch'"),
     (lambda a: a.update(pitch=[5e-6, 25e-6]), r"initial placement: bodies 1 and 3 overlap"),

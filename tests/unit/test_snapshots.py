@@ -67,5 +67,5 @@ def test_interaction_lattice_equal_to_the_fine_one_is_the_full_snapshot():
 
 
 def test_interaction_lattice_finer_than_the_fine_one_is_refused():
-    with pytest.raises(ValueError, match="reuse_interaction must be >= reuse_tolerance"):
+    with pytest.raises(ValueError, match=r"reuse_interaction: 1e-09 is outside the allowed range \[2e-09, 1e-06\] \(>= reuse_tolerance > 0\)"):
         SolverOptions(reuse_tolerance=2e-9, reuse_interaction=1e-9)

@@ -154,8 +154,8 @@ def test_treecode_options_are_checked():
                 dict(near_memory_fraction=2.0)):
         with pytest.raises(ValueError):
             TreecodeOptions(**bad)
-    with pytest.raises(ValueError, match="operator mode"):
-        wb.MobilitySolver(options=wb.SolverOptions(operator="fmm"))
+    with pytest.raises(ValueError, match="operator: 'fmm' is not one of"):
+        wb.SolverOptions(operator="fmm")
     geometry = SurfaceGeometry.from_bodies(grid_of_spheres(1), 2, 1.0, True)
     with pytest.raises(ValueError, match="double layer"):
         DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="treecode", kind="single_layer")

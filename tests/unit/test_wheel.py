@@ -55,9 +55,12 @@ def test_wheel_installs_and_runs_outside_the_checkout(tmp_path):
     _run([warpbem, "run", "tiny.toml", "--output", "tiny.h5"], work, env)
     with h5py.File(work / "tiny.h5", "r") as f:
         time = f["time"][:]
-        height = f["position"][:, 0, 2]
+        start, end = f["position"][0, 0], f["position"][-1, 0]
     # the start frame and one per step of dt_max up to end = 2 dt_max
     assert len(time) == 3 and abs(time[-1] - 2.0e-4) < 1e-12
-    # a free, force-free sphere in wall shear moves along the flow at constant height (Goldman,
-    # Cox & Brenner 1967: no lift in Stokes flow), so its height changes by round-off only
-    assert abs(height[-1] - height[0]) < 1e-12
+    # a free sphere in wall shear travels with the flow, slower than the undisturbed flow at its
+    # centre (Goldman, Cox & Brenner 1967: U = 0.91 gdot h at h/a = 1.5, more at h/a = 1.4 here)
+    # and at a constant height (no lift in Stokes flow; the coarse mesh's error is far below)
+    travel = end[0] - start[0]
+    assert 0.5 * 100.0 * 7.0e-6 * 2.0e-4 < travel < 100.0 * 7.0e-6 * 2.0e-4
+    assert abs(end[2] - start[2]) < 1e-3 * travel and abs(end[1] - start[1]) < 1e-3 * travel

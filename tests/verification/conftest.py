@@ -20,9 +20,10 @@ def sphere_mesh():
 
 
 def resistance(mesh, position, motion, wall=True, **options):
-    """Holding force and torque of a body moved rigidly with motion = (U, Omega)."""
+    """Holding force and torque of a body moved rigidly with motion = (U, Omega); ``options``:
+    fields of ``wb.SolverOptions``."""
     body = wb.Body(mesh, position=position, fixed=True, velocity=motion[:3], angular_velocity=motion[3:])
-    sol = wb.solve_mobility([body], viscosity=1.0, wall=wall, **options)
+    sol = wb.solve_mobility([body], viscosity=1.0, wall=wall, options=wb.SolverOptions(**options))
     return sol.force[0], sol.torque[0]
 
 
@@ -34,6 +35,6 @@ def grand_resistance(mesh, position, orientation=(1, 0, 0, 0), wall=True, **opti
         motion[k] = 1.0
         body = wb.Body(mesh, position=position, orientation=orientation, fixed=True,
                        velocity=motion[:3], angular_velocity=motion[3:])
-        sol = wb.solve_mobility([body], viscosity=1.0, wall=wall, **options)
+        sol = wb.solve_mobility([body], viscosity=1.0, wall=wall, options=wb.SolverOptions(**options))
         columns.append(np.concatenate([sol.force[0], sol.torque[0]]))
     return np.array(columns).T

@@ -17,7 +17,7 @@ from warpbem.app import run
 from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy
 from warpbem.dynamics.simulator import Simulator
 from warpbem.dynamics.state import State
-from warpbem.forces.adhesion import BOLTZMANN, Adhesion
+from warpbem.forces.adhesion import BOLTZMANN, Adhesion, BondOptions
 from warpbem.forces.external import STANDARD_GRAVITY, Gravity
 from warpbem.forces.repulsion import Repulsion
 from warpbem.surfaces.body import Body
@@ -36,8 +36,8 @@ def test_mean_bond_lifetime_under_constant_force_is_one_over_the_bell_rate():
     with mean dt / (1 - exp(-k_r dt)) = 1 / k_r + dt / 2 + O(dt^2): the sample mean matches it
     within 4 standard errors (0.7 % each), and its standard deviation the mean (exponential)."""
     n, dt, force = 20000, 1e-3, 40e-12
-    adh = Adhesion([MESH], [False], **{**TABLE_4_1, "spring_constant": 1e-3, "reactive_compliance": 1e-10,
-                                       "off_rate": 2.0}, max_bonds=n)
+    adh = Adhesion([MESH], [False], BondOptions(**{**TABLE_4_1, "spring_constant": 1e-3, "reactive_compliance": 1e-10,
+                                       "off_rate": 2.0}, max_bonds=n))
     adh.prepare("cpu")
     wp, k = adh.wp, adh.k
     rate = 2.0 * np.exp(1e-10 * force / (BOLTZMANN * 310.0))
@@ -65,8 +65,7 @@ def test_bound_fraction_at_zero_force_is_the_two_state_equilibrium():
     a step), the bound fraction of the chain settles at b = p_f / (p_f + p_r (1 - p_f)), which
     tends to k_f / (k_f + k_r) as dt -> 0. Here k_f = k_r = 50 /s, dt = 2 ms: b = 0.5250 (the
     continuous limit 0.5 is over 6 standard errors away)."""
-    adh = Adhesion([MESH], [False], **{**TABLE_4_1, "spring_constant": 1e-12, "on_rate": 50.0, "off_rate": 50.0},
-                   max_bonds=2000)
+    adh = Adhesion([MESH], [False], BondOptions(**{**TABLE_4_1, "spring_constant": 1e-12, "on_rate": 50.0, "off_rate": 50.0}, max_bonds=2000))
     body = Body(MESH, position=(0, 0, A + REST_GAP))
     contacts = Contacts([body], [MESH.size()], True, GapFinder())
     dt = 2e-3
@@ -87,7 +86,7 @@ def test_bound_fraction_at_zero_force_is_the_two_state_equilibrium():
 
 def rolling_model(seed=0, reuse=2e-9, **changes):
     gravity = Gravity([MESH], [False], [1050.0], 1000.0, STANDARD_GRAVITY)
-    bonds = Adhesion([MESH], [False], **{**TABLE_4_1, **changes}, seed=seed, shear_modulus=[4e3])
+    bonds = Adhesion([MESH], [False], BondOptions(**{**TABLE_4_1, **changes}, seed=seed), shear_modulus=[4e3])
     return Model([MESH], [False], Flow(100.0, 1e-3), interactions=[gravity, Repulsion(), bonds],
                  solver=SolverOptions(reuse_tolerance=reuse), policy=StepPolicy(5e-4, 1e-7, 1e-9), scheme="euler")
 
@@ -231,7 +230,7 @@ def test_a_free_cell_binds_to_ligands_on_an_adherent_cell():
     would compress them, and the loads compared would be round-off, 1e-25 N)."""
     gap = 175e-9 + 60e-9  # tips 60 nm from the adherent surface
     meshes = [MESH, MESH]
-    bonds = Adhesion(meshes, [False, True], **{**TABLE_4_1, "on_rate": 2e3}, ligand_bodies=[False, True], seed=4)
+    bonds = Adhesion(meshes, [False, True], BondOptions(**{**TABLE_4_1, "on_rate": 2e3}, seed=4), ligand_bodies=[False, True])
     model = Model(meshes, [False, True], Flow(100.0, 1e-3), interactions=[bonds],
                   solver=SolverOptions(), policy=StepPolicy(2e-4, 1e-7, 1e-9), scheme="euler")
     sim = Simulator(model)

@@ -19,7 +19,7 @@ import pytest
 import warpbem as wb
 from warpbem.app import cli, scene, xdmf
 from warpbem.dynamics import Flow, Model, Simulator, StepPolicy
-from warpbem.elastic.deformable import Deformation
+from warpbem.elastic.deformable import Deformation, DeformationOptions
 from warpbem.forces.repulsion import Repulsion
 
 A, CA, DT = 5e-6, 0.01, 1e-4
@@ -46,7 +46,7 @@ mesh = { shape = "sphere", radius = 5.0e-6, subdivisions = 2 }
 def cell_in_shear(k, ca, dt, **options):
     mesh = wb.mesh.sphere(A, k)
     flow = Flow(100.0, 1e-3, False)
-    deformation = Deformation([mesh], [True], [1e-3 * 100.0 / ca], [0.33], flow, **options)
+    deformation = Deformation([mesh], [True], [1e-3 * 100.0 / ca], [0.33], flow, DeformationOptions(**options))
     model = Model([mesh], [False], flow, interactions=[deformation], policy=StepPolicy(dt, 1e-7, 1e-9),
                   scheme="euler")
     return mesh, model, Simulator(model)
@@ -100,7 +100,7 @@ def test_a_tank_treading_cell_lifts_off_the_wall_when_its_surface_moves_with_the
         mesh = wb.mesh.sphere(A, 4)
         flow = Flow(100.0, 1e-3, True)
         model = Model([mesh], [False], flow, policy=StepPolicy(1e-4, 1e-7, 1e-9), scheme="euler",
-                      interactions=[Deformation([mesh], [True], [0.5], [0.33], flow, surface_velocity=moving)])
+                      interactions=[Deformation([mesh], [True], [0.5], [0.33], flow, DeformationOptions(surface_velocity=moving))])
         sim = Simulator(model)
         state = model.initial_state([[0.0, 0.0, 7.75e-6]])
         for _ in range(40):
@@ -119,7 +119,7 @@ def test_a_cell_pressed_by_its_neighbours_repulsion_flattens_where_they_touch():
     mesh, not Hertz, sets the contact's resolution."""
     mesh = wb.mesh.sphere(A, 4)
     flow = Flow(0.0, 1.2e-3, False)
-    deformation = Deformation([mesh, mesh], [True, True], [4e3, 4e3], [0.33, 0.33], flow, relaxation=False)
+    deformation = Deformation([mesh, mesh], [True, True], [4e3, 4e3], [0.33, 0.33], flow, DeformationOptions(relaxation=False))
     model = Model([mesh, mesh], [False, False], flow, interactions=[Repulsion(), deformation],
                   policy=StepPolicy(1e-6, 1e-9, 1e-9), scheme="euler")
     sim = Simulator(model)
@@ -284,7 +284,7 @@ def test_the_gaps_leave_out_the_cells_own_contact_loads_with_the_fluids_answer_t
 
     mesh = wb.mesh.sphere(A, 4)
     flow = Flow(100.0, 1e-3, True)
-    deformation = Deformation([mesh], [True], [500.0], [0.33], flow, relaxation=False)
+    deformation = Deformation([mesh], [True], [500.0], [0.33], flow, DeformationOptions(relaxation=False))
     model = Model([mesh], [False], flow, interactions=[deformation])
     state = model.initial_state([[0.0, 0.0, A + 240e-9]])
     body = model.bodies(state)[0]

@@ -20,7 +20,7 @@ import warpbem as wb
 from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy
 from warpbem.dynamics.simulator import Simulator
 from warpbem.elastic.deformable import Deformation
-from warpbem.forces.adhesion import Adhesion
+from warpbem.forces.adhesion import Adhesion, BondOptions
 from warpbem.forces.external import STANDARD_GRAVITY, Gravity
 from warpbem.forces.repulsion import Repulsion
 from warpbem.surfaces.body import Body
@@ -32,7 +32,7 @@ from .test_adhesion import MESH, REST_GAP, TABLE_4_1, A  # the rolling cell of t
 
 def test_receptors_ride_on_the_displaced_surface():
     mesh = wb.mesh.sphere(5e-6, 4)
-    adhesion = Adhesion([mesh], [False], **TABLE_4_1)
+    adhesion = Adhesion([mesh], [False], BondOptions(**TABLE_4_1))
     eps = np.array([[0.01, 0.004, 0.0], [0.004, -0.006, 0.002], [0.0, 0.002, -0.004]])
     deformed = Body(Mesh(mesh.nodes + mesh.nodes @ eps.T, mesh.elements), position=(0.0, 0.0, 6e-6))
     moved = adhesion.tips_at([deformed]) - adhesion.tips
@@ -43,7 +43,7 @@ def test_receptors_ride_on_the_displaced_surface():
 
 def rolling_model(shear_modulus, deformable):
     gravity = Gravity([MESH], [False], [1050.0], 1000.0, STANDARD_GRAVITY)
-    bonds = Adhesion([MESH], [False], **TABLE_4_1, seed=3, shear_modulus=[shear_modulus])
+    bonds = Adhesion([MESH], [False], BondOptions(**TABLE_4_1, seed=3), shear_modulus=[shear_modulus])
     flow = Flow(100.0, 1e-3)
     shape = [Deformation([MESH], [True], [shear_modulus], [0.33], flow)] if deformable else []
     return Model([MESH], [False], flow, interactions=[gravity, Repulsion(), bonds, *shape],

@@ -68,7 +68,7 @@ def test_free_sphere_in_wall_bounded_shear(sphere_mesh, h, config, tol):
     """GCB 1967b: a force- and torque-free sphere in u = gdot z e_x translates at U and spins at
     Omega_y (validation.md). Tolerances relative, ``tol`` for both (Omega measured 0.2 % / 0.05 % off)."""
     body = wb.Body(sphere_mesh(config["subdivisions"]), position=(0, 0, h))
-    sol = wb.solve_mobility([body], shear_rate=1.0, viscosity=1.0, **_solve_options(config))
+    sol = wb.solve_mobility([body], shear_rate=1.0, viscosity=1.0, options=wb.SolverOptions(**_solve_options(config)))
     assert abs(sol.velocity[0, 0] / h / GCB_B[h]["U"] - 1) < tol
     assert abs(sol.angular_velocity[0, 1] / GCB_B[h]["Omega"] - 1) < tol
     assert np.abs(sol.velocity[0, 1:]).max() < 1e-6  # no drift across or towards the wall
@@ -86,7 +86,7 @@ def test_sphere_held_fixed_in_wall_bounded_shear(sphere_mesh, h, config, tol):
     hydro_fx = 6 * np.pi * (u * a["Ft"] - omega * 4 / 3 * a["Tt"])
     hydro_ty = 8 * np.pi * (-u * a["Tt"] + omega * a["Tr"])
     body = wb.Body(sphere_mesh(config["subdivisions"]), position=(0, 0, h), fixed=True)
-    sol = wb.solve_mobility([body], shear_rate=1.0, viscosity=1.0, **_solve_options(config))
+    sol = wb.solve_mobility([body], shear_rate=1.0, viscosity=1.0, options=wb.SolverOptions(**_solve_options(config)))
     assert abs(-sol.force[0, 0] / hydro_fx - 1) < tol
     assert abs(-sol.torque[0, 1] / hydro_ty - 1) < tol
 

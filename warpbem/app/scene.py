@@ -1,98 +1,41 @@
 """Declarative scenes (TOML), validated before any work: every problem is reported with the
-field's dotted name and the allowed values or range. Lengths in metres, times in seconds,
-viscosity in Pa s, densities in kg/m^3, shear rate in 1/s (SI, like the API).
+field's dotted name and the allowed values or range. SI units, like the API.
 
-    [flow]                      shear_rate = 100.0, viscosity = 1.2e-3, wall = true
-    [physics]                   gravity = false, fluid_density = 1000.0, repulsion = false,
-                                adhesion = false
-    [repulsion]                 coefficient = 1e-12 (F0, J), inverse_length = 2e9 (tau, 1/m),
-                                cell_roughness = 175e-9, wall_roughness = 50e-9 (thesis eq. 3.1;
-                                the unit convention of F0 is explained in warpbem/forces/repulsion.py)
-    [adhesion]                  (thesis Table 4.1; warpbem/forces/adhesion.py) spring_constant
-                                (N/m, required), receptor_density = 20e12 (1/m^2),
-                                ligand_density (1/m^2; default: ligands in excess),
-                                equilibrium_length = 30e-9, off_rate = 2.4, on_rate = 365.0
-                                (1/s), reactive_compliance = 0.39e-10 (m), temperature = 310.0,
-                                max_bonds = 100 (per cell), compression = false, seed = 0,
-                                roughness (tips; default: repulsion.cell_roughness),
-                                ligand_layer (default: repulsion.wall_roughness),
-                                kinetics_fraction = 0.1 (the step keeps k dt below it),
-                                cell_ligand_layer (ligands on adherent cells; default:
-                                repulsion.cell_roughness)
-    [deformation]               (deformable bodies; warpbem/elastic/deformable.py) relaxation =
-                                true (the fluid's resistance, tau = 3 mu / 2G; false:
-                                quasi-static), surface_velocity = true (the flow sees the
-                                surface move with the material; false: the deformed shape
-                                rigid), update_interval = 1 (steps between traction and
-                                elastic solves)
-    [time]                      end = 0.01, dt_max = 1e-4, dt_min = 1e-5, contact_gap = 5e-7,
-                                scheme = "heun", and frames by steps, frame_every = 1, or by
-                                time, frame_interval = 1e-3 (s; the steps land on frame times)
-    [solver]                    quadrature_order = 2, density_order = 1 (1: density constant per
-                                element, the seed's; 2: bilinear, README "Accuracy per cost"),
-                                contact_refinement (default 3.0 with density_order 1, 1.1 with
-                                2; the ratio on the k = 4 sphere, scaled with the mesh), tolerance (GMRES;
-                                default 1e-8 for float64, 1e-6 for float32), dtype = "float64",
-                                refine_fixed_at_wall = true, reuse_tolerance (m; mobility
-                                snapshots reused across steps, dynamics/hydrodynamics.py;
-                                default 0, with adhesion on ADHESION_REUSE_TOLERANCE),
-                                reuse_lateral (m; their lateral lattice with several bodies,
-                                default 50 x reuse_tolerance), reuse_interaction (m; the height
-                                lattice of the several-body snapshots, default 10 x
-                                reuse_tolerance), near_far_cutoff (m; adherent cells whose
-                                bounding sphere stays farther than it from every free cell's keep
-                                the background solved once, warpbem/hydro/frozen.py; README
-                                "Frozen adherent arrays" charts the error; default: every solve
-                                holds every body)
-    [[bodies]]                  name, position = [x, y, z], orientation = [w, x, y, z],
-                                fixed = false, density = 1000.0, force = [0, 0, 0] (N),
-                                torque = [0, 0, 0] (N m) on free bodies, adhesive = true (free
-                                bodies with adhesion on), shear_modulus (Pa; none: rigid, no
-                                Hertz patch), poisson_ratio = 0.33, deformable = false
-                                (free bodies: linear elasticity with shear_modulus, see
-                                [deformation]), ligands = false (fixed
-                                bodies: free cells can bind to them), and a mesh:
-    [bodies.mesh]               shape = "sphere" (radius, subdivisions, pole_grading: elements
-                                crowded towards -z, 1 = uniform) | "spheroid" (radius,
-                                aspect_ratio, subdivisions) | "file" (path, relative to the scene)
+Each table is read through the declaration of the options it sets (``warpbem/options.py``):
+``[flow]`` and ``[solver]`` (``hydro/options.py``), ``[physics]``, ``[time]`` (``RunSettings`` and
+the ``StepPolicy``), ``[repulsion]``, ``[adhesion]`` (``BondOptions``), ``[deformation]``,
+``[[bodies]]`` with ``[bodies.mesh]``, and ``[[arrays]]`` (a grid of alike bodies listed after the
+[[bodies]]). Every key with its unit, default, range and meaning: ``docs/scene-reference.md``,
+generated from those declarations (``warpbem/app/reference.py``).
 
-    [[arrays]]                  count = [nx, ny] bodies alike at origin = [x, y, z] + (i pitch_x,
-                                j pitch_y, 0), pitch = [pitch_x, pitch_y], named "<name> i j",
-                                with any body key but position (one mesh for all); listed after
-                                the [[bodies]]
-
-``--set key=value`` overrides use the dotted names, e.g. ``flow.shear_rate=80`` or
-``bodies.0.position=[0,0,7.75e-6]``.
+``[sweep.AXIS]`` tables give the cases of ``warpbem sweep``; ``--set key=value`` overrides use
+the dotted names, e.g. ``flow.shear_rate=80`` or ``bodies.0.position=[0,0,7.75e-6]``.
 """
 
 from __future__ import annotations
 
 import ast
 import copy
-import math
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import NamedTuple
 
+from ..dynamics.integrate import DEFAULT_SCHEME, SCHEMES
 from ..dynamics.model import Flow, Model, SolverOptions, StepPolicy
-from ..options import OptionError, from_table
 from ..dynamics.state import State
-from ..elastic.deformable import Deformation
-from ..forces.adhesion import Adhesion
-from ..forces.external import STANDARD_GRAVITY, ExternalLoads, Gravity
+from ..elastic.deformable import Deformation, DeformationOptions
+from ..forces.adhesion import Adhesion, BondOptions
+from ..forces.external import FLUID_DENSITY, STANDARD_GRAVITY, ExternalLoads, Gravity
 from ..forces.repulsion import Repulsion
+from ..options import OptionError, check_keys, declared, from_table, option, validate
 from ..surfaces import mesh as meshes
 from ..surfaces.body import Body
 from ..surfaces.gaps import WALL, Contacts, GapFinder
 from ..surfaces.placement import PlacementError, check_placement
 
 
+MESH_SHAPES = ("sphere", "spheroid", "file")
 ADHESION_REUSE_TOLERANCE = 2e-9  # m: chosen from benchmarks/adhesion.py (README: adhesion)
-ADHESION_KEYS = {"receptor_density", "ligand_density", "spring_constant", "equilibrium_length", "off_rate",
-                 "reactive_compliance", "on_rate", "temperature", "max_bonds", "compression", "seed", "roughness",
-                 "ligand_layer", "kinetics_fraction", "cell_ligand_layer"}
-
 
 class SceneError(ValueError):
     """A scene that cannot run; the message names the field."""
@@ -106,57 +49,119 @@ def _options(cls, table, where, **given):
         raise SceneError(str(err)) from err
 
 
-def _number(where, value, low=-math.inf, high=math.inf, low_open=False, integer=False):
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise SceneError(f"{where}: expected a finite number, got {value!r}")
-    if integer and int(value) != value:
-        raise SceneError(f"{where}: expected an integer, got {value!r}")
-    if value < low or value > high or (low_open and value == low):
-        bracket = "(" if low_open else "["
-        raise SceneError(f"{where}: {value:g} is outside the allowed range {bracket}{low:g}, {high:g}]")
-    return int(value) if integer else float(value)
-
-
-def _bool(where, value):
-    if not isinstance(value, bool):
-        raise SceneError(f"{where}: expected true or false, got {value!r}")
-    return value
-
-
-def _vector(where, value, length):
-    if not isinstance(value, (list, tuple)) or len(value) != length:
-        raise SceneError(f"{where}: expected a list of {length} numbers, got {value!r}")
-    return tuple(_number(f"{where}[{i}]", v) for i, v in enumerate(value))
-
-
 def _table(where, value, allowed, required=()):
-    if not isinstance(value, dict):
-        raise SceneError(f"{where}: expected a table, got {value!r}")
-    unknown = sorted(set(value) - set(allowed))
-    if unknown:
-        raise SceneError(f"{where}: unknown key {unknown[0]!r}; allowed keys: {', '.join(sorted(allowed))}")
-    missing = [k for k in required if k not in value]
-    if missing:
-        raise SceneError(f"{where}: missing required key {missing[0]!r}")
-    return value
+    try:
+        return check_keys(where, value, allowed, required)
+    except OptionError as err:
+        raise SceneError(str(err)) from err
 
 
-class BodySpec(NamedTuple):
-    """One [[bodies]] entry, validated: SI values, the mesh built."""
+@dataclass(frozen=True)
+class Physics:
+    """What a scene switches on (model no more than it needs)."""
 
-    name: str
-    mesh: meshes.Mesh
-    position: tuple
-    orientation: tuple
-    fixed: bool
-    density: float
-    force: tuple
-    torque: tuple
-    adhesive: bool
-    shear_modulus: float | None
-    poisson_ratio: float
-    ligands: bool
-    deformable: bool
+    gravity: bool = option(False, "gravity and buoyancy on the free bodies (body density against fluid_density)")
+    fluid_density: float = option(FLUID_DENSITY, "density of the fluid, for buoyancy", "kg/m^3", low=100.0, high=1e5)
+    repulsion: bool = option(False, "electrostatic repulsion of thesis eq. 3.1 ([repulsion])")
+    adhesion: bool = option(False, "receptor-ligand bonds of thesis ch. 4 ([adhesion]; needs flow.wall)")
+
+    def __post_init__(self):
+        validate(self)
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """How long a scene runs and which states become frames (the [time] table with the
+    ``StepPolicy``'s keys)."""
+
+    end: float | None = option(None, "simulated time to run to. Required", "s", kind=float, low=0.0, high=1e6,
+                               low_open=True)
+    scheme: str = option(DEFAULT_SCHEME, "time integrator", choices=SCHEMES)
+    frame_every: int | None = option(None, "a frame every this many steps. Default: 1, unless frame_interval is"
+                                     " given", kind=int, low=1, high=1e9)
+    frame_interval: float | None = option(None, "a frame every this simulated time, the steps landing on the frame"
+                                          " times (not with frame_every)", "s", kind=float, low=0.0, high=1e6,
+                                          low_open=True)
+
+    def __post_init__(self):
+        validate(self)
+        if self.frame_every is not None and self.frame_interval is not None:
+            raise OptionError("frame_interval: give frames by steps (frame_every) or by time (frame_interval), not"
+                              " both")
+        if self.frame_interval is not None and self.frame_interval > self.end:
+            raise OptionError(f"frame_interval: {self.frame_interval:g} is outside the allowed range (0,"
+                              f" {self.end:g}] (at most end)")
+        if self.frame_interval is None and self.frame_every is None:
+            object.__setattr__(self, "frame_every", 1)
+
+
+@dataclass(frozen=True)
+class MeshOptions:
+    """A body's mesh ([bodies.mesh]): a library shape or a QUAD9 mesh file."""
+
+    shape: str = option("sphere", "the mesh: a cube-sphere, a spheroid (axis z) or a file", choices=MESH_SHAPES)
+    radius: float | None = option(None, "radius (sphere; spheroid: equatorial). Required for a sphere or spheroid",
+                                  "m", kind=float, low=0.0, high=1e-2, low_open=True)
+    subdivisions: int = option(4, "k: 6 k^2 QUAD9 elements (k = 4: 96)", low=1, high=32)
+    aspect_ratio: float | None = option(None, "spheroid's polar over equatorial radius (<1 oblate). Required for a"
+                                        " spheroid", kind=float, low=0.05, high=20.0)
+    pole_grading: float = option(1.0, "sphere: elements crowded towards -z by this ratio (1: uniform)", low=1.0,
+                                 high=100.0)
+    path: str | None = option(None, "QUAD9 mesh file, relative to the scene file (shape = 'file')", kind=str)
+
+    def __post_init__(self):
+        validate(self)
+
+
+@dataclass(frozen=True)
+class BodySpec:
+    """One [[bodies]] entry (or a member of an [[arrays]] entry), validated, SI; ``mesh`` built
+    from its [bodies.mesh] table."""
+
+    position: tuple | None = option(None, "reference point (the mesh's origin). Required", "m", kind=float,
+                                    length=3)
+    name: str | None = option(None, "name in outputs. Default: body<index> (arrays: '<name> i j')", kind=str)
+    orientation: tuple = option((1.0, 0.0, 0.0, 0.0), "unit quaternion (w, x, y, z) of the body frame",
+                                kind=float, length=4)
+    fixed: bool = option(False, "held at rest (an adherent cell): its holding load is an output")
+    density: float = option(FLUID_DENSITY, "density (gravity)", "kg/m^3", low=100.0, high=1e5)
+    force: tuple = option((0.0, 0.0, 0.0), "external force on a free body", "N", kind=float, length=3)
+    torque: tuple = option((0.0, 0.0, 0.0), "external torque on a free body, about its reference point", "N m",
+                           kind=float, length=3)
+    adhesive: bool = option(True, "a free body forms bonds (with physics.adhesion)")
+    shear_modulus: float | None = option(None, "shear modulus G: the Hertz patch, and the deformation of a"
+                                         " deformable body. Default: rigid", "Pa", kind=float, low=0.0, high=1e12,
+                                         low_open=True)
+    poisson_ratio: float = option(0.33, "Poisson ratio nu", low=-1.0, high=0.5, low_open=True, high_open=True)
+    ligands: bool = option(False, "a fixed body carries ligands free cells can bind to")
+    deformable: bool = option(False, "a free body deforms as a linear elastic solid ([deformation])")
+    mesh: meshes.Mesh | None = None  # built from [bodies.mesh]
+
+    def __post_init__(self):
+        validate(self)
+        if self.position is None:
+            raise OptionError("position: missing (m)")
+        if self.deformable and (self.fixed or self.shear_modulus is None):
+            raise OptionError("deformable: a deformable body must be free and give its shear_modulus (Pa; fixed"
+                              " cells are not deformed yet)")
+        if self.ligands and not self.fixed:
+            raise OptionError("ligands: ligands are modelled on fixed (adherent) cells only")
+        if self.fixed and (any(self.force) or any(self.torque)):
+            raise OptionError("force: the body is fixed; its load is what holds it (an output), so give force and"
+                              " torque for free bodies only")
+
+
+@dataclass(frozen=True)
+class ArrayOptions:
+    """An [[arrays]] entry's grid: count = [nx, ny] alike bodies at origin + (i pitch_x, j pitch_y,
+    0), with any [[bodies]] key but position."""
+
+    count: tuple | None = option(None, "bodies along x and y. Required", kind=int, length=2, low=1, high=4096)
+    pitch: tuple | None = option(None, "spacing along x and y. Required", "m", kind=float, length=2)
+    origin: tuple | None = option(None, "position of body (0, 0). Required", "m", kind=float, length=3)
+
+    def __post_init__(self):
+        validate(self)
 
 
 @dataclass(frozen=True)
@@ -199,25 +204,25 @@ class Scene:
 
 
 def _mesh(where, spec, folder: Path):
-    shape = _table(where, spec, {"shape", "radius", "subdivisions", "aspect_ratio", "path", "pole_grading"},
-                   ("shape",))["shape"]
-    k = _number(f"{where}.subdivisions", spec.get("subdivisions", 4), 1, 32, integer=True)
-    if "pole_grading" in spec and shape != "sphere":
+    options = _options(MeshOptions, spec, where, required=("shape",))
+    for key in ("radius", "aspect_ratio", "path"):
+        needed = {"radius": ("sphere", "spheroid"), "aspect_ratio": ("spheroid",), "path": ("file",)}[key]
+        if options.shape in needed and getattr(options, key) is None:
+            raise SceneError(f"{where}.{key}: missing (needed by shape = {options.shape!r})")
+    if "pole_grading" in spec and options.shape != "sphere":
         raise SceneError(f"{where}.pole_grading: only a sphere is graded (shape = 'sphere')")
-    if shape == "sphere":
-        return meshes.sphere(_number(f"{where}.radius", spec.get("radius"), 0, 1e-2, low_open=True), k,
-                             pole_grading=_number(f"{where}.pole_grading", spec.get("pole_grading", 1.0), 1, 100))
-    if shape == "spheroid":
-        return meshes.spheroid(_number(f"{where}.radius", spec.get("radius"), 0, 1e-2, low_open=True),
-                               _number(f"{where}.aspect_ratio", spec.get("aspect_ratio"), 0.05, 20), k)
-    if shape == "file":
-        if not isinstance(spec.get("path"), str):
-            raise SceneError(f"{where}.path: expected the path of a QUAD9 mesh file")
-        try:
-            return meshes.load(folder / spec["path"])
-        except meshes.MeshError as err:
-            raise SceneError(f"{where}.path: {err}") from err
-    raise SceneError(f"{where}.shape: {shape!r} is not one of 'sphere', 'spheroid', 'file'")
+    if options.shape == "sphere":
+        return meshes.sphere(options.radius, options.subdivisions, pole_grading=options.pole_grading)
+    if options.shape == "spheroid":
+        return meshes.spheroid(options.radius, options.aspect_ratio, options.subdivisions)
+    try:
+        return meshes.load(folder / options.path)
+    except meshes.MeshError as err:
+        raise SceneError(f"{where}.path: {err}") from err
+
+
+TIME_KEYS = ("end", "dt_max", "dt_min", "contact_gap", "scheme", "frame_every", "frame_interval")
+POLICY_KEYS = ("dt_max", "dt_min", "contact_gap")
 
 
 def parse(table: dict, folder: Path = Path(".")) -> Scene:
@@ -226,84 +231,51 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
                            "bodies", "arrays", "sweep"},
            ("flow", "time"))
     sweep = _sweep_axes(table.get("sweep", {}))
-    if isinstance(table["flow"], dict) and "shear_rate" not in table["flow"]:
-        raise SceneError("flow: missing required key 'shear_rate'")
-    flow_ = _options(Flow, table["flow"], "flow")
-    physics = _table("physics", table.get("physics", {}), {"gravity", "fluid_density", "repulsion", "adhesion"})
-    adhesion = _table("adhesion", table.get("adhesion", {}), ADHESION_KEYS)
-    deformation = _table("deformation", table.get("deformation", {}), {"relaxation", "update_interval",
-                                                                               "surface_velocity"})
-    # validated even when no body deforms, so typos surface early
-    relaxation = _bool("deformation.relaxation", deformation.get("relaxation", True))
-    surface_velocity = _bool("deformation.surface_velocity", deformation.get("surface_velocity", True))
-    update_interval = _number("deformation.update_interval", deformation.get("update_interval", 1), 1, 1e6,
-                              integer=True)
-    repulsion = _table("repulsion", table.get("repulsion", {}),
-                       {"coefficient", "inverse_length", "cell_roughness", "wall_roughness"})
-    time = _table("time", table["time"], {"end", "dt_max", "dt_min", "contact_gap", "scheme", "frame_every",
-                                          "frame_interval"}, ("end",))
-    solver = _table("solver", table.get("solver", {}), {name for name in SolverOptions.__dataclass_fields__
-                                                        if name != "treecode"})
+    flow = _options(Flow, table["flow"], "flow", required=("shear_rate",))
+    physics = _options(Physics, table.get("physics", {}), "physics")
+    # validated even when switched off, so typos surface early
+    deformation = _options(DeformationOptions, table.get("deformation", {}), "deformation")
+    repulsion = _options(Repulsion, table.get("repulsion", {}), "repulsion")
+    adhesion = _table("adhesion", table.get("adhesion", {}), {name for name, _, _ in declared(BondOptions)})
+    time = _table("time", table["time"], TIME_KEYS, ("end",))
+    run = _options(RunSettings, {k: v for k, v in time.items() if k not in POLICY_KEYS}, "time")
+    policy = _options(StepPolicy, {k: v for k, v in time.items() if k in POLICY_KEYS}, "time")
+    solver = _table("solver", table.get("solver", {}), {name for name, _, _ in declared(SolverOptions)})
     bodies = []
     for i, spec in enumerate(_entries("bodies", table.get("bodies", []))):
         where = f"bodies.{i}"
         _table(where, spec, BODY_KEYS, ("mesh", "position"))
-        mesh = _mesh(f"{where}.mesh", spec["mesh"], folder)
-        bodies.append(_body(where, spec, mesh, str(spec.get("name", f"body{i}"))))
+        bodies.append(_body(where, spec, _mesh(f"{where}.mesh", spec["mesh"], folder), f"body{i}"))
     for i, spec in enumerate(_entries("arrays", table.get("arrays", []))):
         bodies += _array(f"arrays.{i}", spec, folder)
     if not bodies:
         raise SceneError("bodies: expected at least one [[bodies]] or [[arrays]] entry")
-    end = _number("time.end", time["end"], 0, 1e6, low_open=True)
-    dt_max = _number("time.dt_max", time.get("dt_max", 1e-4), 0, 10, low_open=True)
-    dt_min = _number("time.dt_min", time.get("dt_min", min(1e-5, dt_max)), 0, dt_max, low_open=True)
-    if "frame_every" in time and "frame_interval" in time:
-        raise SceneError("time.frame_interval: give frames by steps (frame_every) or by time (frame_interval), not both")
-    frame_interval = (_number("time.frame_interval", time["frame_interval"], 0, end, low_open=True)
-                      if "frame_interval" in time else None)
-    frame_every = (None if frame_interval is not None
-                   else _number("time.frame_every", time.get("frame_every", 1), 1, 1e9, integer=True))
-    repulsion_model = Repulsion(  # validated even when switched off, so typos surface early
-        _number("repulsion.coefficient", repulsion.get("coefficient", 1e-12), 0, 1, low_open=True),
-        _number("repulsion.inverse_length", repulsion.get("inverse_length", 2e9), 0, 1e12, low_open=True),
-        _number("repulsion.cell_roughness", repulsion.get("cell_roughness", 175e-9), 0, 1e-5),
-        _number("repulsion.wall_roughness", repulsion.get("wall_roughness", 50e-9), 0, 1e-5))
-    scheme = _choice("time.scheme", time.get("scheme", "heun"), ("euler", "heun"))
     meshes_, fixed = [b.mesh for b in bodies], [b.fixed for b in bodies]
-    fluid_density = _number("physics.fluid_density", physics.get("fluid_density", 1000.0), 100.0, 1e5)
     # model no more than the scene needs: only the interactions switched on are built
     interactions = []
-    if _bool("physics.gravity", physics.get("gravity", False)):
-        interactions.append(Gravity(meshes_, fixed, [b.density for b in bodies], fluid_density, STANDARD_GRAVITY))
+    if physics.gravity:
+        interactions.append(Gravity(meshes_, fixed, [b.density for b in bodies], physics.fluid_density,
+                                    STANDARD_GRAVITY))
     if any(any(b.force) or any(b.torque) for b in bodies):
         interactions.append(ExternalLoads(fixed, [b.force for b in bodies], [b.torque for b in bodies]))
-    if _bool("physics.repulsion", physics.get("repulsion", False)):
-        interactions.append(repulsion_model)
-    adhesive = _bool("physics.adhesion", physics.get("adhesion", False))
-    if adhesive:
-        interactions.append(_adhesion(adhesion, bodies, repulsion_model, dt_min, flow_.wall))
+    if physics.repulsion:
+        interactions.append(repulsion)
+    if physics.adhesion:
+        interactions.append(_adhesion(adhesion, bodies, repulsion, policy.dt_min, flow.wall))
     # bonds: mobility snapshots reused across steps unless the scene says otherwise (SolverOptions)
-    solver_options = _options(SolverOptions, {"reuse_tolerance": ADHESION_REUSE_TOLERANCE, **solver} if adhesive
-                              else solver, "solver").resolved(time_stepping=True)
+    solver_options = _options(SolverOptions, {"reuse_tolerance": ADHESION_REUSE_TOLERANCE, **solver}
+                              if physics.adhesion else solver, "solver").resolved(time_stepping=True)
     if any(b.deformable for b in bodies):
-        interactions.append(Deformation(
-            meshes_, [b.deformable for b in bodies], [b.shear_modulus for b in bodies],
-            [b.poisson_ratio for b in bodies], flow_,
-            relaxation=relaxation, surface_velocity=surface_velocity, update_interval=update_interval,
-            solver=solver_options))
-    model = Model(
-        meshes=meshes_, fixed=fixed, names=[b.name for b in bodies], interactions=interactions,
-        flow=flow_, solver=solver_options,
-        policy=StepPolicy(dt_max, dt_min,
-                          _number("time.contact_gap", time.get("contact_gap", 5e-7), 0, 1e-2, low_open=True)),
-        scheme=scheme)
-    return Scene(raw=copy.deepcopy(table), bodies=tuple(bodies), model=model, end=end, frame_every=frame_every,
-                 frame_interval=frame_interval, sweep=sweep)
+        interactions.append(Deformation(meshes_, [b.deformable for b in bodies], [b.shear_modulus for b in bodies],
+                                        [b.poisson_ratio for b in bodies], flow, deformation, solver=solver_options))
+    model = Model(meshes=meshes_, fixed=fixed, names=[b.name for b in bodies], interactions=interactions, flow=flow,
+                  solver=solver_options, policy=policy, scheme=run.scheme)
+    return Scene(raw=copy.deepcopy(table), bodies=tuple(bodies), model=model, end=run.end,
+                 frame_every=run.frame_every, frame_interval=run.frame_interval, sweep=sweep)
 
 
-BODY_KEYS = {"name", "mesh", "position", "orientation", "fixed", "density", "force", "torque", "adhesive",
-             "shear_modulus", "poisson_ratio", "ligands", "deformable"}
-ARRAY_KEYS = {"count", "pitch", "origin"}
+BODY_KEYS = {name for name, _, _ in declared(BodySpec)} | {"mesh"}
+ARRAY_KEYS = {name for name, _, _ in declared(ArrayOptions)}
 
 
 def _entries(where, value) -> list:
@@ -313,88 +285,39 @@ def _entries(where, value) -> list:
 
 
 def _body(where, spec, mesh, name, position=None) -> BodySpec:
-    """One body's keys (BODY_KEYS, checked by the caller) as a BodySpec named ``name``;
-    ``position`` given for the members of an array."""
-    body = BodySpec(name, mesh,
-                    position or _vector(f"{where}.position", spec["position"], 3),
-                    _vector(f"{where}.orientation", spec.get("orientation", [1.0, 0, 0, 0]), 4),
-                    _bool(f"{where}.fixed", spec.get("fixed", False)),
-                    _number(f"{where}.density", spec.get("density", 1000.0), 100.0, 1e5),
-                    _vector(f"{where}.force", spec.get("force", [0.0, 0.0, 0.0]), 3),
-                    _vector(f"{where}.torque", spec.get("torque", [0.0, 0.0, 0.0]), 3),
-                    _bool(f"{where}.adhesive", spec.get("adhesive", True)),
-                    None if "shear_modulus" not in spec else
-                    _number(f"{where}.shear_modulus", spec["shear_modulus"], 0, 1e12, low_open=True),
-                    _poisson(f"{where}.poisson_ratio", spec.get("poisson_ratio", 0.33)),
-                    _bool(f"{where}.ligands", spec.get("ligands", False)),
-                    _bool(f"{where}.deformable", spec.get("deformable", False)))
-    if body.deformable and (body.fixed or body.shear_modulus is None):
-        raise SceneError(f"{where}.deformable: a deformable body must be free and give its shear_modulus (Pa;"
-                         " fixed cells are not deformed yet)")
-    if body.ligands and not body.fixed:
-        raise SceneError(f"{where}.ligands: ligands are modelled on fixed (adherent) cells only")
-    if body.fixed and (any(body.force) or any(body.torque)):
-        raise SceneError(f"{where}.force: the body is fixed; its load is what holds it (an output), so give"
-                         " force and torque for free bodies only")
-    return body
+    """One body's keys (BODY_KEYS, checked by the caller) as a BodySpec, named ``name`` unless
+    it names itself; ``position`` given for the members of an array."""
+    keys = {k: v for k, v in spec.items() if k not in ("mesh", "name")}
+    given = {"name": str(spec.get("name", name)), "mesh": mesh}
+    if position is not None:
+        given["position"] = position
+    return _options(BodySpec, keys, where, **given)
 
 
 def _array(where, spec, folder) -> list:
-    """An [[arrays]] entry: count = [nx, ny] bodies alike (the body keys but position) at origin
-    + (i pitch_x, j pitch_y, 0), named "<name> i j", sharing one mesh."""
+    """An [[arrays]] entry (``ArrayOptions``): alike bodies named "<name> i j", sharing one mesh."""
     _table(where, spec, (BODY_KEYS - {"position"}) | ARRAY_KEYS, ("mesh", "count", "pitch", "origin"))
-    count = spec["count"]
-    if not isinstance(count, list) or len(count) != 2:
-        raise SceneError(f"{where}.count: expected [nx, ny], got {count!r}")
-    nx, ny = (_number(f"{where}.count[{k}]", c, 1, 4096, integer=True) for k, c in enumerate(count))
-    pitch = _vector(f"{where}.pitch", spec["pitch"], 2)
-    origin = _vector(f"{where}.origin", spec["origin"], 3)
+    grid = _options(ArrayOptions, {k: spec[k] for k in ARRAY_KEYS}, where)
+    (nx, ny), pitch, origin = grid.count, grid.pitch, grid.origin
     mesh = _mesh(f"{where}.mesh", spec["mesh"], folder)
     name = str(spec.get("name", where))
-    return [_body(where, spec, mesh, f"{name} {i} {j}",
-                  (origin[0] + i * pitch[0], origin[1] + j * pitch[1], origin[2]))
+    body_keys = {k: v for k, v in spec.items() if k not in ARRAY_KEYS | {"name"}}
+    return [_body(where, body_keys, mesh, f"{name} {i} {j}", (origin[0] + i * pitch[0], origin[1] + j * pitch[1],
+                                                             origin[2]))
             for i in range(nx) for j in range(ny)]
-
-
-def _poisson(where, value):
-    value = _number(where, value, -1.0, 0.5)
-    if value in (-1.0, 0.5):
-        raise SceneError(f"{where}: {value:g} is outside the allowed range (-1, 0.5) (linear elasticity)")
-    return value
 
 
 def _adhesion(table, bodies, repulsion: Repulsion, dt_min: float, wall: bool) -> Adhesion:
     """The [adhesion] table and the bodies' keys as an Adhesion, checked by field name."""
     if not wall:
         raise SceneError("physics.adhesion: bonds form with ligands on the wall; it needs flow.wall = true")
-    if "spring_constant" not in table:
-        raise SceneError("adhesion.spring_constant: missing (N/m; thesis Table 4.1: 0.5-100 dyn/cm = 5e-4-0.1 N/m)")
-    get = table.get
     if not any(b.adhesive and not b.fixed for b in bodies):
         raise SceneError("bodies: adhesion is on but no free body is adhesive (bodies.N.adhesive)")
+    options = _options(BondOptions, table, "adhesion").resolved(repulsion.cell_roughness, repulsion.wall_roughness)
     try:
-        adhesion = Adhesion(
-            [b.mesh for b in bodies], [b.fixed for b in bodies], adhesive=[b.adhesive for b in bodies],
-            receptor_density=_number("adhesion.receptor_density", get("receptor_density", 20e12), 0, 1e18,
-                                     low_open=True),
-            ligand_density=(None if "ligand_density" not in table else
-                            _number("adhesion.ligand_density", table["ligand_density"], 0, 1e18, low_open=True)),
-            spring_constant=_number("adhesion.spring_constant", table["spring_constant"], 0, 1e3, low_open=True),
-            equilibrium_length=_number("adhesion.equilibrium_length", get("equilibrium_length", 30e-9), 0, 1e-6),
-            off_rate=_number("adhesion.off_rate", get("off_rate", 2.4), 0, 1e9),
-            reactive_compliance=_number("adhesion.reactive_compliance", get("reactive_compliance", 0.39e-10), 0, 1e-8),
-            on_rate=_number("adhesion.on_rate", get("on_rate", 365.0), 0, 1e9),
-            temperature=_number("adhesion.temperature", get("temperature", 310.0), 0, 1e4, low_open=True),
-            max_bonds=_number("adhesion.max_bonds", get("max_bonds", 100), 1, 1e5, integer=True),
-            compression=_bool("adhesion.compression", get("compression", False)),
-            seed=_number("adhesion.seed", get("seed", 0), 0, 2**31 - 1, integer=True),
-            roughness=_number("adhesion.roughness", get("roughness", repulsion.cell_roughness), 0, 1e-5),
-            ligand_layer=_number("adhesion.ligand_layer", get("ligand_layer", repulsion.wall_roughness), 0, 1e-5),
-            kinetics_fraction=_number("adhesion.kinetics_fraction", get("kinetics_fraction", 0.1), 0, 1, low_open=True),
-            shear_modulus=[b.shear_modulus for b in bodies], poisson_ratio=[b.poisson_ratio for b in bodies],
-            ligand_bodies=[b.ligands for b in bodies],
-            cell_ligand_layer=_number("adhesion.cell_ligand_layer", get("cell_ligand_layer", repulsion.cell_roughness),
-                                      0, 1e-5))
+        adhesion = Adhesion([b.mesh for b in bodies], [b.fixed for b in bodies], options,
+                            adhesive=[b.adhesive for b in bodies], shear_modulus=[b.shear_modulus for b in bodies],
+                            poisson_ratio=[b.poisson_ratio for b in bodies], ligand_bodies=[b.ligands for b in bodies])
     except ValueError as err:
         raise SceneError(f"adhesion: {err}") from err
     # the step is bounded by the kinetics, k dt <= kinetics_fraction; dt_min must allow it
@@ -404,12 +327,6 @@ def _adhesion(table, bodies, repulsion: Repulsion, dt_min: float, wall: bool) ->
                              f" {rate * dt_min:.3g} > kinetics_fraction {adhesion.kinetics_fraction:g}); the"
                              f" allowed range is dt_min <= {adhesion.kinetics_fraction / rate:.3g} s")
     return adhesion
-
-
-def _choice(where, value, allowed):
-    if value not in allowed:
-        raise SceneError(f"{where}: {value!r} is not one of {', '.join(repr(a) for a in allowed)}")
-    return value
 
 
 def _sweep_axes(table) -> dict:

@@ -14,10 +14,11 @@ from ..forces.interaction import Interaction
 from ..hydro.frozen import FrozenArraySolver
 from ..hydro.mobility import MobilitySolver
 from ..hydro.options import Flow, SolverOptions
+from ..options import OptionError, option, validate
 from ..surfaces.body import Body
 from ..surfaces.gaps import outer_radius
 from ..surfaces.mesh import Mesh
-from .integrate import SCHEMES
+from .integrate import DEFAULT_SCHEME, SCHEMES
 from .state import State
 
 
@@ -28,20 +29,27 @@ def build_solver(options: SolverOptions, flow: Flow, device) -> MobilitySolver |
     return solver if options.near_far_cutoff is None else FrozenArraySolver(solver, options.near_far_cutoff)
 
 
+DT_MIN = 1e-5  # s: the shortest step by default (thesis ch. 3.3: 1e-4 to 1e-5 s), or dt_max if shorter
+
+
 @dataclass(frozen=True)
 class StepPolicy:
     """Adaptive step: dt = dt_max far from contact, shrinking in proportion to the smallest gap
     below ``contact_gap`` (m) down to dt_min (thesis ch. 3.3: 1e-4 to 1e-5 s)."""
 
-    dt_max: float = 1e-4
-    dt_min: float = 1e-5
-    contact_gap: float = 0.5e-6
+    dt_max: float = option(1e-4, "the step far from contact", "s", low=0.0, high=10.0, low_open=True)
+    dt_min: float | None = option(None, "the shortest step, near contact (and of retries). Default: 1e-5 or dt_max"
+                                  " if shorter", "s", kind=float, low=0.0, high=10.0, low_open=True)
+    contact_gap: float = option(0.5e-6, "the step shrinks in proportion to the smallest gap below this", "m",
+                                low=0.0, high=1e-2, low_open=True)
 
     def __post_init__(self):
-        if not (0 < self.dt_min <= self.dt_max) or not np.isfinite(self.dt_max):
-            raise ValueError(f"need 0 < dt_min <= dt_max, got dt_min={self.dt_min}, dt_max={self.dt_max}")
-        if not self.contact_gap > 0:
-            raise ValueError(f"contact_gap must be positive, got {self.contact_gap}")
+        validate(self)
+        if self.dt_min is None:
+            object.__setattr__(self, "dt_min", min(DT_MIN, self.dt_max))
+        if self.dt_min > self.dt_max:
+            raise OptionError(f"dt_min: {self.dt_min:g} is outside the allowed range (0, {self.dt_max:g}] (at most"
+                              " dt_max)")
 
     def dt(self, gap: float) -> float:
         return float(np.clip(self.dt_max * gap / self.contact_gap, self.dt_min, self.dt_max))
@@ -71,7 +79,7 @@ class Model:
     interactions: tuple = ()
     solver: SolverOptions = SolverOptions()
     policy: StepPolicy = StepPolicy()
-    scheme: str = "heun"
+    scheme: str = DEFAULT_SCHEME
     names: tuple = ()
 
     def __post_init__(self):

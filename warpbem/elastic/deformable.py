@@ -124,12 +124,14 @@ Hertz, sets the flattening there.
 from __future__ import annotations
 
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..forces.adhesion import compliance, hertz_radius
 from ..forces.interaction import Interaction
 from ..hydro.options import SolverOptions
+from ..options import option, validate
 from ..hydro.traction import solve_traction
 from ..surfaces.body import rotation_matrix
 from ..surfaces.gaps import WALL
@@ -165,6 +167,21 @@ def balanced(mesh: Mesh, traction: np.ndarray, where=None) -> np.ndarray:
     return traction - sum(c * column for c, column in zip(coefficients, columns))
 
 
+@dataclass(frozen=True)
+class DeformationOptions:
+    """How deformable cells are modelled (module docstring)."""
+
+    relaxation: bool = option(True, "the fluid's resistance to the deformation: relaxation time tau = 3 mu / 2G"
+                              " (Roscoe 1967); false: quasi-static, u = u*")
+    surface_velocity: bool = option(True, "the flow sees the surface move with the material (false: the deformed"
+                                    " shape moves rigidly at the instant)")
+    update_interval: int = option(1, "steps between traction and elastic solves (relaxing towards the kept target"
+                                  " in between)", low=1, high=1e6)
+
+    def __post_init__(self):
+        validate(self)
+
+
 class DeformationWarning(UserWarning):
     """A deformable cell outside the range where its model is accurate (it still runs)."""
 
@@ -175,28 +192,25 @@ class DeformationError(RuntimeError):
 
 class Deformation(Interaction):
     """Linear elastic deformation of the ``deformable`` bodies (module docstring): per body
-    ``shear_modulus`` (Pa) and ``poisson_ratio``; ``flow`` the model's ``Flow``; ``relaxation``
-    the fluid's resistance to the deformation (False: quasi-static); ``surface_velocity`` the
-    flow seeing the surface move with the material; the target re-solved every
-    ``update_interval`` steps; ``solver``: the model's ``SolverOptions``, which the traction and
+    ``shear_modulus`` (Pa) and ``poisson_ratio``; ``flow`` the model's ``Flow``; ``options``
+    the ``DeformationOptions``; ``solver``: the model's ``SolverOptions``, which the traction and
     the interior elastic problem take (quadrature, contact refinement, GMRES, operator mode)."""
 
     name = "deformation"
     shapes_bodies = True
 
-    def __init__(self, meshes, deformable, shear_modulus, poisson_ratio, flow, *, relaxation: bool = True,
-                 surface_velocity: bool = True, update_interval: int = 1, solver: SolverOptions | None = None):
+    def __init__(self, meshes, deformable, shear_modulus, poisson_ratio, flow,
+                 options: DeformationOptions = DeformationOptions(), *, solver: SolverOptions | None = None):
         self.meshes = list(meshes)
         self.deformable = np.asarray(deformable, dtype=bool)
         if len(self.deformable) != len(self.meshes) or not self.deformable.any():
             raise ValueError("deformable must flag each body, at least one of them")
         for i in np.flatnonzero(self.deformable):
             check_material(shear_modulus[i], poisson_ratio[i])
-        if int(update_interval) != update_interval or update_interval < 1:
-            raise ValueError(f"update_interval must be a whole number of steps >= 1, not {update_interval}")
         self.flow = flow
-        self.relaxation, self.update_interval = bool(relaxation), int(update_interval)
-        self.surface_velocity = bool(surface_velocity)
+        self.options = options
+        self.relaxation, self.update_interval = options.relaxation, options.update_interval
+        self.surface_velocity = options.surface_velocity
         self.solver = solver or SolverOptions()
         self.shear_modulus, self.poisson_ratio = list(shear_modulus), list(poisson_ratio)
         self.max_nodes = max(len(m.nodes) for m in self.meshes)

@@ -42,23 +42,65 @@ Model, written down (SI):
 
 from __future__ import annotations
 
+import dataclasses
+from dataclasses import dataclass
+
 import numpy as np
 
 from .. import runtime
+from ..options import OptionError, declared, option, validate
 from ..surfaces import quad9
 from ..surfaces.gaps import WALL, bounding_spheres
 from .interaction import ImplicitCoordinates, Interaction
+from .repulsion import Repulsion
 
 BOLTZMANN = 1.380649e-23  # J/K
 APPROACH_MARGIN = 100e-9  # m: a cell approaches the wall far less than this in one step
 SPLIT_THREADS = 4096  # launches at least this long are split over the CPU threads
 
 
-def _positive(name, value, allow_zero=False):
-    if isinstance(value, bool) or not np.isfinite(value) or value < 0 or (value == 0 and not allow_zero):
-        bound = ">= 0" if allow_zero else "> 0"
-        raise ValueError(f"adhesion {name} must be {bound} and finite, got {value!r}")
-    return float(value)
+@dataclass(frozen=True)
+class BondOptions:
+    """The bond model's parameters (module docstring; defaults: thesis Table 4.1)."""
+
+    spring_constant: float | None = option(None, "bond spring constant sigma (eq. 4.3; Table 4.1: 0.5-100 dyn/cm ="
+                                           " 5e-4-0.1 N/m). Required", "N/m", kind=float, low=0.0, high=1e3,
+                                           low_open=True)
+    receptor_density: float = option(20e12, "receptors per area of an adhesive cell's surface, at its microvillus"
+                                     " tips", "1/m^2", low=0.0, high=1e18, low_open=True)
+    ligand_density: float | None = option(None, "ligands per area; the on-rate scales by min(1, n_l / n_r). Default:"
+                                          " ligands in excess", "1/m^2", kind=float, low=0.0, high=1e18,
+                                          low_open=True)
+    equilibrium_length: float = option(30e-9, "bond rest length lambda (eq. 4.3)", "m", low=0.0, high=1e-6)
+    off_rate: float = option(2.4, "unstressed rupture rate k_r0 (eq. 4.1)", "1/s", low=0.0, high=1e9)
+    on_rate: float = option(365.0, "formation rate k_f0 at the rest length (eq. 4.2)", "1/s", low=0.0, high=1e9)
+    reactive_compliance: float = option(0.39e-10, "Bell's reactive compliance r0 (eq. 4.1-4.2)", "m", low=0.0,
+                                        high=1e-8)
+    temperature: float = option(310.0, "absolute temperature T (k T in eq. 4.1-4.2)", "K", low=0.0, high=1e4,
+                                low_open=True)
+    max_bonds: int = option(100, "cap of bonds per cell (the size of its bond table)", low=1, high=1e5)
+    compression: bool = option(False, "bonds resist compression too (false: a compressed bond is slack)")
+    seed: int = option(0, "seed of the receptors' placement and the bond Monte Carlo", low=0, high=2**31 - 1)
+    roughness: float | None = option(None, "tip height of the receptors above the surface. Default: the repulsion's"
+                                     " cell_roughness", "m", kind=float, low=0.0, high=1e-5)
+    ligand_layer: float | None = option(None, "thickness of the wall's ligand layer. Default: the repulsion's"
+                                        " wall_roughness", "m", kind=float, low=0.0, high=1e-5)
+    kinetics_fraction: float = option(0.1, "the step keeps k dt below this for every bond rate", low=0.0, high=1.0,
+                                      low_open=True)
+    cell_ligand_layer: float | None = option(None, "thickness of the ligand layer on adherent cells. Default: the"
+                                             " repulsion's cell_roughness", "m", kind=float, low=0.0, high=1e-5)
+
+    def __post_init__(self):
+        validate(self)
+        if self.spring_constant is None:
+            raise OptionError("spring_constant: missing (N/m; thesis Table 4.1: 0.5-100 dyn/cm = 5e-4-0.1 N/m)")
+
+    def resolved(self, cell_roughness: float, wall_roughness: float) -> "BondOptions":
+        """The layers not given taken from the repulsion's roughness (m)."""
+        return dataclasses.replace(
+            self, roughness=cell_roughness if self.roughness is None else self.roughness,
+            ligand_layer=wall_roughness if self.ligand_layer is None else self.ligand_layer,
+            cell_ligand_layer=cell_roughness if self.cell_ligand_layer is None else self.cell_ligand_layer)
 
 
 def compliance(shear_modulus, poisson_ratio):
@@ -108,36 +150,20 @@ def sample_receptors(mesh, density: float, roughness: float, rng):
 
 class Adhesion(Interaction):
     """Bonds between the adhesive free cells and the wall, or the fixed cells marked in
-    ``ligand_bodies`` (module docstring). Parameters in SI: densities 1/m^2, spring_constant
-    N/m, lengths m, rates 1/s, temperature K; per body ``shear_modulus`` (Pa, None or 0: rigid,
-    no contact patch) and ``poisson_ratio``; ``adhesive`` (default: every free body)."""
+    ``ligand_bodies`` (module docstring), with the parameters of ``options`` (``BondOptions``;
+    layers not given: the default repulsion's roughness); per body ``shear_modulus`` (Pa, None
+    or 0: rigid, no contact patch) and ``poisson_ratio``; ``adhesive`` (default: every free
+    body). The parameters are also attributes of the same names."""
 
     name = "bond"
     implicit = True
 
-    def __init__(self, meshes, fixed, *, receptor_density, spring_constant, equilibrium_length, off_rate,
-                 reactive_compliance, on_rate, temperature=310.0, max_bonds=100, compression=False, seed=0,
-                 ligand_density=None, roughness=175e-9, ligand_layer=50e-9, shear_modulus=None,
-                 poisson_ratio=None, kinetics_fraction=0.1, adhesive=None, ligand_bodies=None, cell_ligand_layer=None):
+    def __init__(self, meshes, fixed, options: BondOptions, *, shear_modulus=None, poisson_ratio=None,
+                 adhesive=None, ligand_bodies=None):
         n = len(meshes)
-        self.receptor_density = _positive("receptor_density", receptor_density)
-        self.ligand_density = None if ligand_density is None else _positive("ligand_density", ligand_density)
-        self.spring_constant = _positive("spring_constant", spring_constant)
-        self.equilibrium_length = _positive("equilibrium_length", equilibrium_length, allow_zero=True)
-        self.off_rate = _positive("off_rate", off_rate, allow_zero=True)
-        self.reactive_compliance = _positive("reactive_compliance", reactive_compliance, allow_zero=True)
-        self.on_rate = _positive("on_rate", on_rate, allow_zero=True)
-        self.temperature = _positive("temperature", temperature)
-        self.roughness = _positive("roughness", roughness, allow_zero=True)
-        self.ligand_layer = _positive("ligand_layer", ligand_layer, allow_zero=True)
-        self.kinetics_fraction = _positive("kinetics_fraction", kinetics_fraction)
-        if isinstance(max_bonds, bool) or int(max_bonds) != max_bonds or max_bonds < 1:
-            raise ValueError(f"adhesion max_bonds must be a positive integer, got {max_bonds!r}")
-        self.max_bonds = int(max_bonds)
-        self.compression = bool(compression)
-        if isinstance(seed, bool) or int(seed) != seed or not 0 <= seed < 2**31:
-            raise ValueError(f"adhesion seed must be an integer in [0, 2^31), got {seed!r}")
-        self.seed = int(seed)
+        self.options = options.resolved(Repulsion.cell_roughness, Repulsion.wall_roughness)
+        for name, _, _ in declared(BondOptions):  # read as attributes throughout the bond model
+            setattr(self, name, getattr(self.options, name))
         fixed = np.asarray(fixed, dtype=bool)
         adhesive = ~fixed if adhesive is None else np.asarray(adhesive, dtype=bool) & ~fixed
         self.cells = np.flatnonzero(adhesive)  # adhesive free bodies, in body order
@@ -148,8 +174,6 @@ class Adhesion(Interaction):
             raise ValueError("ligand_bodies must mark fixed bodies only (one flag per body): ligands on a moving"
                              " cell are not modelled")
         self.ligand_bodies = np.flatnonzero(carriers)
-        self.cell_ligand_layer = self.roughness if cell_ligand_layer is None else _positive(
-            "cell_ligand_layer", cell_ligand_layer, allow_zero=True)
         modulus = np.zeros(n) if shear_modulus is None else np.array(
             [0.0 if g is None else g for g in shear_modulus], dtype=float)
         ratio = np.full(n, 0.33) if poisson_ratio is None else np.array(

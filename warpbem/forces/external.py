@@ -9,6 +9,7 @@ import numpy as np
 from .interaction import Interaction, Loads
 
 STANDARD_GRAVITY = 9.80665  # m/s^2
+FLUID_DENSITY = 1000.0  # kg/m^3: plasma, about water's; also a cell's density by default (neutrally buoyant)
 
 
 def _rows(name, value, n):
@@ -25,7 +26,7 @@ class Gravity(Interaction):
 
     name = "gravity"
 
-    def __init__(self, meshes, fixed, densities, fluid_density: float = 1000.0,
+    def __init__(self, meshes, fixed, densities, fluid_density: float = FLUID_DENSITY,
                  acceleration: float = STANDARD_GRAVITY):
         densities = np.asarray(densities, dtype=float)
         if densities.shape != (len(meshes),) or not np.all(densities > 0):

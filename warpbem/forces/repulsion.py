@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..options import option, validate
 from ..surfaces.gaps import WALL
 from ..surfaces.placement import PlacementError
 from .interaction import ImplicitCoordinates, Interaction
@@ -52,20 +53,16 @@ class Repulsion(Interaction):
     name = "repulsion"
     implicit = True
 
-    coefficient: float = 1e-12
-    inverse_length: float = 2e9
-    cell_roughness: float = 175e-9
-    wall_roughness: float = 50e-9
+    coefficient: float = option(1e-12, "F0 of thesis eq. 3.1 (the thesis's 1e6 pN um; module docstring: units)",
+                                "J", low=0.0, high=1.0, low_open=True)
+    inverse_length: float = option(2e9, "tau of thesis eq. 3.1: the force changes e-fold over 1/tau", "1/m",
+                                   low=0.0, high=1e12, low_open=True)
+    cell_roughness: float = option(175e-9, "roughness layer of a cell (microvilli): the gap eps is measured"
+                                   " from its top", "m", low=0.0, high=1e-5)
+    wall_roughness: float = option(50e-9, "roughness layer of the wall (glycocalyx)", "m", low=0.0, high=1e-5)
 
     def __post_init__(self):
-        for name in ("coefficient", "inverse_length"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"repulsion {name} must be positive and finite, got {value!r}")
-        for name in ("cell_roughness", "wall_roughness"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value >= 0):
-                raise ValueError(f"repulsion {name} must be >= 0 and finite, got {value!r}")
+        validate(self)
 
     def separation(self, gap, to_wall: bool):
         """Roughness-tip separation eps (m) of a surface gap (m)."""
