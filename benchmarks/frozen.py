@@ -144,7 +144,7 @@ def rel(a, b):
 
 def without_split(options):
     """The scene's solver options without the split (the full solve, and the split's inner)."""
-    return replace(options, near_far_cutoff=None)
+    return replace(options, near_far_split="off")
 
 
 def step_case(scene: str, overrides: list, steps: int, split: bool, device: str) -> dict:

@@ -67,20 +67,6 @@ def resolve_device(device):
         raise ValueError(f"device {device!r} is not available; this machine has {names}") from err
 
 
-def free_memory(device) -> int:
-    """Bytes free on ``device``: MemAvailable on the host (Linux), the GPU's free memory on CUDA."""
-    if not device.is_cpu:
-        return int(device.free_memory)
-    try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
-
-
 def total_memory(device) -> int:
     """Bytes of memory of ``device``: the host's physical memory, the GPU's on CUDA. A run's
     operator mode is decided from this, not from what happens to be free at the moment (the run's

@@ -4,6 +4,7 @@ against the direct sum and against the no-slip condition, and its checks."""
 
 import warnings
 
+import h5py
 import numpy as np
 import pytest
 
@@ -165,7 +166,7 @@ def test_the_split_refuses_moving_adherent_cells_and_changed_arrays(scene_4x4):
 
 
 def test_a_run_with_the_split_steps_as_the_full_one_when_every_cell_is_near():
-    """The split plugged into the time step (SolverOptions.near_far_cutoff): with every
+    """The split plugged into the time step (SolverOptions.near_far_split): with every
     adherent cell near, two Heun steps of a sedimenting cell in shear past a 2 x 2 array, its
     repulsion from the wall implicit, land where those of the full solve land."""
     from warpbem.dynamics import Flow, Model, Simulator, SolverOptions, StepPolicy
@@ -175,8 +176,8 @@ def test_a_run_with_the_split_steps_as_the_full_one_when_every_cell_is_near():
     fixed = [False] + [True] * 4
     positions = [[-12e-6, 7.5e-6, 5.3e-6]] + [[15e-6 * i, 15e-6 * j, 6e-6] for i in range(2) for j in range(2)]
     ends = {}
-    for cutoff in (None, 1e-3):
-        options = SolverOptions(contact_refinement=0.0, near_far_cutoff=cutoff)
+    for split in ("off", "on"):
+        options = SolverOptions(contact_refinement=0.0, near_far_split=split, near_far_cutoff=1e-3)
         model = Model([cell] * 5, fixed, Flow(100.0, 1.2e-3),
                       interactions=[Gravity([cell] * 5, fixed, [1050.0] * 5, 1000.0, STANDARD_GRAVITY), Repulsion()],
                       solver=options, policy=StepPolicy(2e-3, 1e-6, 5e-7))
@@ -184,8 +185,50 @@ def test_a_run_with_the_split_steps_as_the_full_one_when_every_cell_is_near():
         state = model.initial_state(positions)
         for _ in range(2):
             state, frame = sim.step(state)
-        ends[cutoff] = (state.positions[0] - positions[0], frame.force[1:])
+        ends[split] = (state.positions[0] - positions[0], frame.force[1:])
     assert ("near-far" in sim.solver.operator_description)
-    moved, held = ends[None]
-    np.testing.assert_allclose(ends[1e-3][0], moved, rtol=0, atol=1e-6 * np.abs(moved).max())
-    np.testing.assert_allclose(ends[1e-3][1], held, rtol=0, atol=1e-6 * np.abs(held).max())
+    moved, held = ends["off"]
+    np.testing.assert_allclose(ends["on"][0], moved, rtol=0, atol=1e-6 * np.abs(moved).max())
+    np.testing.assert_allclose(ends["on"][1], held, rtol=0, atol=1e-6 * np.abs(held).max())
+
+
+def test_the_split_switches_itself_on_from_the_threshold_and_is_reported(tmp_path):
+    """near_far_split = "auto" takes the split for models with NEAR_FAR_FIXED_CELLS fixed cells
+    and more, not below; "off" and "on" override it; a run reports it in its progress line and
+    its HDF5 attributes."""
+    from warpbem.app import run
+    from warpbem.dynamics.model import build_solver
+    from warpbem.hydro.options import NEAR_FAR_FIXED_CELLS, Flow, SolverOptions
+
+    flow = Flow(100.0, 1.2e-3)
+    auto = SolverOptions()
+    assert isinstance(build_solver(auto, flow, "cpu", NEAR_FAR_FIXED_CELLS), FrozenArraySolver)
+    assert not isinstance(build_solver(auto, flow, "cpu", NEAR_FAR_FIXED_CELLS - 1), FrozenArraySolver)
+    assert not isinstance(build_solver(SolverOptions(near_far_split="off"), flow, "cpu", 10**4), FrozenArraySolver)
+    assert isinstance(build_solver(SolverOptions(near_far_split="on"), flow, "cpu", 1), FrozenArraySolver)
+    side = int(np.ceil(np.sqrt(NEAR_FAR_FIXED_CELLS)))
+    scene = tmp_path / "array.toml"
+    scene.write_text(f"""
+[flow]
+shear_rate = 100.0
+[time]
+end = 1e-4
+dt_max = 1e-4
+[solver]
+contact_refinement = 0.0
+[[bodies]]
+position = [-20e-6, 5e-6, 8e-6]
+mesh = {{ shape = "sphere", radius = 5e-6, subdivisions = 1 }}
+[[arrays]]
+count = [{side}, {side}]
+pitch = [30e-6, 30e-6]
+origin = [0.0, 0.0, 6e-6]
+fixed = true
+mesh = {{ shape = "sphere", radius = 5e-6, subdivisions = 1 }}
+""")
+    lines = []
+    run.run(scene, tmp_path / "array.h5", progress=lines.append)
+    assert any("near-far 40 um" in line for line in lines)
+    with h5py.File(tmp_path / "array.h5", "r") as f:
+        assert f.attrs["near_far_split"] == f"on (auto: {side * side} fixed cells)"
+        assert "near-far 40 um" in f.attrs["operator"]

@@ -6,7 +6,7 @@ import pytest
 from warpbem import Body, mesh, runtime
 from warpbem.hydro.geometry import SurfaceGeometry
 from warpbem.hydro.mobility import CompletedDoubleLayer
-from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions
+from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions, choose_operator
 
 
 def make_operator(bodies, wall, mode="dense", device="cpu", kind="double_layer", **quadrature):
@@ -103,16 +103,17 @@ def test_cdl_spectrum_lies_in_the_right_half_plane():
     assert eig.real.max() < 1.0 + 1e-6
 
 
-def test_auto_mode_assembles_only_what_fits():
+def test_auto_mode_follows_the_one_rule():
+    """mode="auto" of any operator (the traction's too) is choose_operator's: dense while the
+    matrix takes at most a quarter of the device's memory, else the treecode for the double
+    layer and matrix-free for the other kinds."""
     bodies = two_spheres_near_wall()
     geometry = SurfaceGeometry.from_bodies(bodies, 3, 1.0, True)
-    auto = DoubleLayerOperator(geometry, True, QuadratureOptions())
-    assert auto.mode == "dense"  # 0.84 MB here
-    tight = DoubleLayerOperator(geometry, True, QuadratureOptions(), dense_memory_limit=1e5)
-    assert tight.mode == "treecode"  # the double layer; other kernels go matrix-free
-    assert DoubleLayerOperator(geometry, True, QuadratureOptions(), dense_memory_limit=1e5,
-                               kind="single_layer").mode == "matrix_free"
-    assert runtime.free_memory(runtime.resolve_device("cpu")) > 1e8
+    assert DoubleLayerOperator(geometry, True, QuadratureOptions()).mode == "dense"  # 0.84 MB here
+    assert DoubleLayerOperator(geometry, True, QuadratureOptions(), kind="adjoint_double_layer").mode == "dense"
+    too_large = int(np.sqrt(runtime.total_memory(runtime.resolve_device("cpu")) / 8)) + 1
+    assert choose_operator(too_large) == "treecode"
+    assert choose_operator(too_large, kind="single_layer") == "matrix_free"
 
 
 @pytest.mark.parametrize("mode", ["dense", "matrix_free"])

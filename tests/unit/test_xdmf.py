@@ -58,7 +58,7 @@ def test_one_grid_per_frame_with_the_run_s_times_and_placed_meshes(run_file):
 
     with h5py.File(run_file) as f:
         time, position, orientation = f["time"][:], f["position"][:], f["orientation"][:]
-        meshes = [b[1] for b in scene.parse(json.loads(f.attrs["scene"]), run_file.parent).bodies]
+        meshes = [b.mesh for b in scene.parse(json.loads(f.attrs["scene"]), run_file.parent).bodies]
     assert len(time) == 3 and not np.allclose(orientation[-1, 0], [1, 0, 0, 0])  # the first body turned
 
     root = ET.parse(path).getroot()

@@ -81,6 +81,7 @@ def run(scene_path, output, overrides=(), device="cpu", resume=False, progress=p
     else:
         attrs["scene_folder"] = str(Path(scene_path).resolve().parent)
         attrs["body_names"] = json.dumps(list(scene.model.names))
+        attrs["near_far_split"] = sim.near_far_split
         bonds = scene.model.interaction("bond")
         if bonds is not None:
             attrs["seed"] = bonds.seed  # the bond Monte Carlo's stream (kernels/bonds.py)

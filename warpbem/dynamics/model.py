@@ -22,11 +22,12 @@ from .integrate import DEFAULT_SCHEME, SCHEMES
 from .state import State
 
 
-def build_solver(options: SolverOptions, flow: Flow, device) -> MobilitySolver | FrozenArraySolver:
-    """The mobility solver of a model's ``options`` (resolved for time stepping) and ``flow``:
-    with ``near_far_cutoff`` the split of frozen adherent arrays around it (``hydro/frozen.py``)."""
+def build_solver(options: SolverOptions, flow: Flow, device, fixed_cells: int = 0) -> MobilitySolver | FrozenArraySolver:
+    """The mobility solver of a model's ``options`` (resolved for time stepping) and ``flow``,
+    with the near-far split of frozen adherent arrays (``hydro/frozen.py``) where the options
+    take it for ``fixed_cells`` fixed cells (``SolverOptions.splits_near_far``)."""
     solver = MobilitySolver(flow.shear_rate, flow.viscosity, flow.wall, device, options.resolved(time_stepping=True))
-    return solver if options.near_far_cutoff is None else FrozenArraySolver(solver, options.near_far_cutoff)
+    return FrozenArraySolver(solver, options.near_far_cutoff) if options.splits_near_far(fixed_cells) else solver
 
 
 DT_MIN = 1e-5  # s: the shortest step by default (thesis ch. 3.3: 1e-4 to 1e-5 s), or dt_max if shorter
@@ -37,11 +38,11 @@ class StepPolicy:
     """Adaptive step: dt = dt_max far from contact, shrinking in proportion to the smallest gap
     below ``contact_gap`` (m) down to dt_min (thesis ch. 3.3: 1e-4 to 1e-5 s)."""
 
-    dt_max: float = option(1e-4, "the step far from contact", "s", low=0.0, high=10.0, low_open=True)
+    dt_max: float = option(1e-4, "the step far from contact", "s", low=0.0, low_open=True)
     dt_min: float | None = option(None, "the shortest step, near contact (and of retries). Default: 1e-5 or dt_max"
-                                  " if shorter", "s", kind=float, low=0.0, high=10.0, low_open=True)
+                                  " if shorter", "s", kind=float, low=0.0, low_open=True)
     contact_gap: float = option(0.5e-6, "the step shrinks in proportion to the smallest gap below this", "m",
-                                low=0.0, high=1e-2, low_open=True)
+                                low=0.0, low_open=True)
 
     def __post_init__(self):
         validate(self)

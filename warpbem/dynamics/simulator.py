@@ -130,7 +130,9 @@ class Simulator:
 
     def __init__(self, model: Model, device="cpu"):
         self.model = model
-        self.solver = build_solver(model.solver, model.flow, device)
+        fixed_cells = int(model.fixed_mask.sum())
+        self.solver = build_solver(model.solver, model.flow, device, fixed_cells)
+        self.near_far_split = model.solver.near_far_report(fixed_cells)  # on or off, and why
         self.hydro = HydrodynamicSolves(model, self.solver)
         self.gaps = GapFinder(device)
         for x in model.interactions:

@@ -47,12 +47,9 @@ import numpy as np
 from ..surfaces.gaps import candidate_pairs, outer_radius
 from .mobility import MobilitySolution, MobilitySolver, all_completion_poles, checked_bodies, checked_loads
 from .operators import DoubleLayerOperator, quadrature_strengths
+from .options import DEFAULT_CUTOFF
 from .treecode import FarField, TreecodeOptions
 
-# m: adherent cells within this gap (between bounding spheres) of a free cell are solved with it;
-# the free cell's velocity then stays within 1.2e-4 of the full solve on an 8 x 8 array of domes
-# (benchmarks/frozen.py, README "Frozen adherent arrays"; 30 um: 3.5e-4, 20 um: 2e-3)
-DEFAULT_CUTOFF = 40e-6
 # adherent elements from which the background flow is evaluated by the tree; below, the direct
 # sum over every element costs less than the tree's set-up (a 2 x 2 array's tree: 20 s; an 8 x 8
 # array of domes, 6144 elements: 0.05 s per evaluation at a free cell's 96 points)

@@ -30,9 +30,9 @@ Applied as an assembled dense matrix (Warp assembly, NumPy BLAS on CPU, a Warp k
 CUDA), matrix-free (the direct sum: Warp recomputes the element integrals in every product), or
 by the treecode (``treecode.py``: the near field exactly, stored or recomputed, the far field of
 the double layer and of point forces at ``point_sources`` by interpolation, O(N)).
-``mode="auto"`` here assembles while the matrix takes at most half the device's free memory,
-else the treecode (the double layer) or matrix-free (other kinds); a time-stepping run decides
-once, from the total memory (``choose_operator``, used by ``MobilitySolver``).
+``mode="auto"`` follows one rule, ``choose_operator``: dense while the matrix takes at most a
+quarter of the device's total memory, else the treecode (the double layer) or matrix-free (other
+kinds); a ``MobilitySolver`` decides it once, at its first solve, for all later ones.
 """
 
 from __future__ import annotations
@@ -86,15 +86,18 @@ DENSE_MEMORY_SHARE = 0.25  # "auto": dense while one matrix takes at most this s
 DENSE_HEADROOM = 0.03  # a dense matrix's buffer (CPU) has room for this share more unknowns
 
 
-def choose_operator(size: int, dtype: str = "float64", device="cpu") -> str:
-    """The operator of a run of ``size`` unknowns, decided once from the device's total memory:
-    "dense" while the matrix takes at most DENSE_MEMORY_SHARE of it (room for the solver's
-    factored blocks, and for a second matrix in the steps whose kept block cannot move in place,
-    ``_moved_kept_block``), else "treecode". From the total, not the free memory: the free memory falls with the run's
+def choose_operator(size: int, dtype: str = "float64", device="cpu", kind: str = "double_layer") -> str:
+    """The one rule for ``mode="auto"``, an operator of ``size`` unknowns from the device's total
+    memory: "dense" while the matrix takes at most DENSE_MEMORY_SHARE of it (room for the
+    solver's factored blocks, and for a second matrix in the steps whose kept block cannot move
+    in place, ``_moved_kept_block``), else "treecode" for the double layer, "matrix_free" for
+    the other kinds. From the total, not the free memory: the free memory falls with the run's
     own kept systems, and a run that chose by it switched to matrix-free part-way."""
     itemsize = 8 if dtype == "float64" else 4
     device = runtime.resolve_device(device)
-    return "dense" if size**2 * itemsize <= DENSE_MEMORY_SHARE * runtime.total_memory(device) else "treecode"
+    if size**2 * itemsize <= DENSE_MEMORY_SHARE * runtime.total_memory(device):
+        return "dense"
+    return "treecode" if kind == "double_layer" else "matrix_free"
 
 
 def quadrature_strengths(geometry: SurfaceGeometry, density: np.ndarray) -> np.ndarray:
@@ -112,8 +115,7 @@ class DoubleLayerOperator:
     the elements of ``geometry``, dense or matrix-free, with its self blocks (module docstring)."""
 
     def __init__(self, geometry: SurfaceGeometry, wall: bool, quadrature: QuadratureOptions,
-                 dtype: str = "float64", device="cpu", mode: str = "auto",
-                 dense_memory_limit: float | None = None, reuse: "DoubleLayerOperator | None" = None,
+                 dtype: str = "float64", device="cpu", mode: str = "auto", reuse: "DoubleLayerOperator | None" = None,
                  kind: str = "double_layer", treecode: TreecodeOptions | None = None,
                  point_sources: np.ndarray | None = None):
         if mode not in OPERATOR_MODES:
@@ -135,13 +137,7 @@ class DoubleLayerOperator:
         self.quadrature = quadrature
         self.size = 3 * geometry.n_points
         self.surface = geometry.to_device(self.kernels, quadrature, self.device)
-        matrix_bytes = self.size**2 * np.dtype(self.np_dtype).itemsize
-        if dense_memory_limit is None:  # "auto": assemble while the matrix fits in half the free memory
-            dense_memory_limit = 0.5 * runtime.free_memory(self.device)
-        if mode == "auto":
-            fits = matrix_bytes <= dense_memory_limit
-            mode = "dense" if fits else "treecode" if kind == "double_layer" else "matrix_free"
-        self.mode = mode
+        self.mode = choose_operator(self.size, dtype, self.device, kind) if mode == "auto" else mode
         self.point_sources = np.zeros((0, 3)) if point_sources is None else np.asarray(point_sources, dtype=float)
         self._lists = {}
         self.far_field = self._far_field(treecode or TreecodeOptions()) if mode == "treecode" else None

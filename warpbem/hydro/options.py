@@ -29,6 +29,17 @@ NEAR_FACTOR = {1: 2.0, 2: 3.0, 3: 3.0}
 # round-off, so 1e-8 is out of their reach (the stability map: 1e-6 converges down to gaps of
 # 0.1 radius)
 DEFAULT_TOLERANCE = {"float64": 1e-8, "float32": 1e-6}
+# m: adherent cells within this gap (between bounding spheres) of a free cell are solved with it
+# by the near-far split (frozen.py); the free cell's velocity then stays within 1.2e-4 of the full
+# solve on an 8 x 8 array of domes (benchmarks/frozen.py, README "Frozen adherent arrays"; 30 um:
+# 3.5e-4, 20 um: 2e-3)
+DEFAULT_CUTOFF = 40e-6
+NEAR_FAR_SPLITS = ("auto", "on", "off")
+# fixed cells from which "auto" switches the near-far split on: from 4 x 4 domes the split's step
+# was never dearer than the full solve's in three runs, from 5 x 5 35-40 % cheaper; below it cost
+# as much or up to 30 % more (1 x 1) and adds its approximation for nothing (benchmarks/frozen.py
+# steps --counts 1 2 3 4 5 --full, docs/figures/frozen_steps_notes.md)
+NEAR_FAR_FIXED_CELLS = 16
 # the density order of a solve, and of a time-stepped model (SolverOptions.density_order)
 SOLVE_DENSITY_ORDER = 2
 TIME_STEPPING_DENSITY_ORDER = 1
@@ -86,10 +97,13 @@ class SolverOptions:
     reuse_interaction: float | None = option(None, "height lattice of the several-body snapshots, >= reuse_tolerance."
                                              " Default: 10 x reuse_tolerance", "m", kind=float, low=0.0, high=1e-6,
                                              low_open=True)
-    near_far_cutoff: float | None = option(None, "adherent cells whose bounding sphere stays farther than this from"
-                                           " every free cell's keep the background solved once (hydro/frozen.py;"
-                                           " README 'Frozen adherent arrays'). Default: every solve holds every"
-                                           " body", "m", kind=float, low=0.0, high=1e-2)
+    near_far_split: str = option("auto", "time stepping: the adherent cells' background solved once, each solve"
+                                 " holding the free cells and the adherent cells near them (hydro/frozen.py): on,"
+                                 f" off, or auto: on with at least {NEAR_FAR_FIXED_CELLS} fixed cells"
+                                 " (benchmarks/frozen.py)", choices=NEAR_FAR_SPLITS)
+    near_far_cutoff: float = option(DEFAULT_CUTOFF, "with the split, adherent cells whose bounding sphere stays"
+                                    " farther than this from every free cell's keep their background (README 'Frozen"
+                                    " adherent arrays': the error against it)", "m", low=0.0, high=1e-2)
     treecode: TreecodeOptions = TreecodeOptions()  # the far field's settings (API only, not a scene key)
 
     def __post_init__(self):
@@ -104,6 +118,18 @@ class SolverOptions:
         refinement = DEFAULT_CONTACT_REFINEMENT[order] if self.contact_refinement is None else self.contact_refinement
         tolerance = DEFAULT_TOLERANCE[self.dtype] if self.tolerance is None else self.tolerance
         return dataclasses.replace(self, density_order=order, contact_refinement=refinement, tolerance=tolerance)
+
+    def splits_near_far(self, fixed_cells: int) -> bool:
+        """Whether a time-stepped model with ``fixed_cells`` fixed cells takes the near-far split."""
+        return self.near_far_split == "on" or (self.near_far_split == "auto" and fixed_cells >= NEAR_FAR_FIXED_CELLS)
+
+    def near_far_report(self, fixed_cells: int) -> str:
+        """The split's state and why, for the run's attributes: "on (auto: 64 fixed cells)"."""
+        state = "on" if self.splits_near_far(fixed_cells) else "off"
+        if self.near_far_split != "auto":
+            return f"{state} (set)"
+        return f"{state} (auto: {fixed_cells} fixed cells" + ("" if state == "on" else
+                                                             f", below {NEAR_FAR_FIXED_CELLS}") + ")"
 
     @property
     def near_factor(self) -> float:
