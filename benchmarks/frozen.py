@@ -12,8 +12,8 @@ steps: the crossing scene over --counts arrays (n x n domes), in a process of it
 peak memory): set-up (the first frame: the background solve), and the time per step measured as
 (T(2k steps) - T(k steps)) / k with k = --steps, the cell starting mid-array between two columns
 (the same neighbourhood from 8 x 8 on; the 3 x 3 array's is its edge). --full also runs the
-arrays up to --full-max without the split (every body in every solve), each path's arrays with
-and without it one after the other. --paths: the free cell's path (the flow is along x; the cell
+arrays up to --full-max without the split (every body in every solve), each array with and
+then without it (near: the adherent cells in each solve, all of them without the split). --paths: the free cell's path (the flow is along x; the cell
 starts mid-array and moves with it), one or more of
   between   (the default, the scene's own): 6 um high (1 um over the wall), midway between the
             two middle rows, 15 um from each row's centre line (lateral gap 5 um to the domes),
@@ -254,7 +254,7 @@ def step_case(scene: str, overrides: list, steps: int, split: bool, device: str,
                 travel_um=float(np.linalg.norm(end - loaded.bodies[0].position)) * 1e6,
                 elements=int(sum(len(m.elements) for m in model.meshes)), split=split, setup_s=setup,
                 step_s=per_step, first_steps_s=marks[steps - 1] - setup,
-                near=int(len(getattr(sim.solver, "near_bodies", []))), operator=sim.solver.operator,
+                near=int(len(sim.solver.near_bodies)) if split else int(model.fixed_mask.sum()), operator=sim.solver.operator,
                 peak_gb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6)
 
 
@@ -274,11 +274,12 @@ STEP_FORMATS = {"setup_s": "{:.1f}", "step_s": "{:.3f}", "first_steps_s": "{:.2f
 
 
 def steps(args):
-    """Each path's arrays, with the split then (--full) without, one after the other."""
+    """Each path's arrays, each with the split and then (--full) without, side by side."""
     rows = []
     for path in args.paths:
-        cases = [(n, True) for n in args.counts]
-        cases += [(n, False) for n in args.counts if args.full and n <= args.full_max]
+        # each array with the split and then without, side by side (the shared machine's load drifts)
+        cases = [(n, split) for n in args.counts for split in (True, False)
+                 if split or (args.full and n <= args.full_max)]
         for n, split in cases:
             overrides, layout = path_case(path, n)
             row = run_case(SCENE.name, overrides, args.steps, split, args.device, layout)
