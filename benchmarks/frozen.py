@@ -31,7 +31,9 @@ starts mid-array and moves with it), one or more of
             its diagonal, between two diagonal lines of domes.
 Each path's table gives step_over_smallest: the step against the same path's and mode's smallest
 array (the issue's check: 8 x 8 over 3 x 3 with the split <= 3), and amortised_s: (set-up + N
-steps) / N with N = --amortise (the split's background solve is in its set-up, the first frame).
+steps) / N with N = --amortise (the split's background solve is in its set-up, the first frame);
+the cpu_ columns the same in process time (all the process's threads), which other work on a
+shared machine moves less than the wall-clock time.
 --tag names the CSV and chart (frozen_steps_TAG.csv / .png; without, frozen_steps.csv).
 
 suspension: scenes/sedimenting_over_array.toml (64 free cells over 16 x 16 domes): the free
@@ -239,21 +241,23 @@ def step_case(scene: str, overrides: list, steps: int, split: bool, device: str,
         model = replace(model, solver=without_split(model.solver))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         sim = Simulator(model, device)
         state = loaded.initial_state()
         sim.frame(state)
-        setup = time.perf_counter() - t0
-        marks = []
+        setup, cpu_setup = time.perf_counter() - t0, time.process_time() - c0
+        marks, cpu = [], []
         for k in range(2 * steps):
             state, frame = sim.step(state)
             marks.append(time.perf_counter() - t0)
+            cpu.append(time.process_time() - c0)
     per_step = (marks[2 * steps - 1] - marks[steps - 1]) / steps
+    cpu_step = (cpu[2 * steps - 1] - cpu[steps - 1]) / steps
     end = state.positions[0]
     return dict(bodies=model.n_bodies, domes=int(model.fixed_mask.sum()),
                 travel_um=float(np.linalg.norm(end - loaded.bodies[0].position)) * 1e6,
                 elements=int(sum(len(m.elements) for m in model.meshes)), split=split, setup_s=setup,
-                step_s=per_step, first_steps_s=marks[steps - 1] - setup,
+                step_s=per_step, cpu_setup_s=cpu_setup, cpu_step_s=cpu_step, first_steps_s=marks[steps - 1] - setup,
                 near=int(len(sim.solver.near_bodies)) if split else int(model.fixed_mask.sum()), operator=sim.solver.operator,
                 peak_gb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6)
 
@@ -270,7 +274,9 @@ def run_case(scene: str, overrides: list, steps: int, split: bool, device: str, 
 
 
 STEP_FORMATS = {"setup_s": "{:.1f}", "step_s": "{:.3f}", "first_steps_s": "{:.2f}", "peak_gb": "{:.2f}",
-                "step_over_smallest": "{:.2f}", "amortised_s": "{:.3f}", "travel_um": "{:.1f}"}
+                "step_over_smallest": "{:.2f}", "amortised_s": "{:.3f}", "travel_um": "{:.1f}",
+                "cpu_setup_s": "{:.1f}", "cpu_step_s": "{:.3f}", "cpu_over_smallest": "{:.2f}",
+                "cpu_amortised_s": "{:.3f}"}
 
 
 def steps(args):
@@ -290,6 +296,9 @@ def steps(args):
         smallest = min(same, key=lambda q: q["domes"])
         r["step_over_smallest"] = r["step_s"] / smallest["step_s"]
         r["amortised_s"] = (r["setup_s"] + args.amortise * r["step_s"]) / args.amortise
+        if "cpu_step_s" in r:  # process time (all threads): less moved by other work on a shared machine
+            r["cpu_over_smallest"] = r["cpu_step_s"] / smallest["cpu_step_s"]
+            r["cpu_amortised_s"] = (r["cpu_setup_s"] + args.amortise * r["cpu_step_s"]) / args.amortise
     print()
     print_table(rows, STEP_FORMATS)
     name = f"frozen_steps_{args.tag}" if args.tag else "frozen_steps"
