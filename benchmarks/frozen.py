@@ -12,7 +12,29 @@ steps: the crossing scene over --counts arrays (n x n domes), in a process of it
 peak memory): set-up (the first frame: the background solve), and the time per step measured as
 (T(2k steps) - T(k steps)) / k with k = --steps, the cell starting mid-array between two columns
 (the same neighbourhood from 8 x 8 on; the 3 x 3 array's is its edge). --full also runs the
-arrays up to --full-max without the split (every body in every solve).
+arrays up to --full-max without the split (every body in every solve), each array with and
+then without it (near: the adherent cells in each solve, all of them without the split). --paths: the free cell's path (the flow is along x; the cell
+starts mid-array and moves with it), one or more of
+  between   (the default, the scene's own): 6 um high (1 um over the wall), midway between the
+            two middle rows, 15 um from each row's centre line (lateral gap 5 um to the domes),
+            starting midway between two columns;
+  along     directly above a row of domes (the row at y = -15 um, the lower of the two middle
+            rows), the cell's lowest point 1.5 um above the domes' top (the top taken from the
+            dome's mesh: 8.75 um above the wall, so the centre is 15.25 um high), starting midway
+            between two columns: it passes over the next dome's top with a 1.5 um gap;
+  diagonal  the same array rotated by 45 degrees about its centre (positions and orientations of
+            the domes; so seen along the flow, staggered rows 30/sqrt(2) = 21.2 um apart, domes
+            42.4 um apart in a row, each row shifted by half of that), the cell 6 um high midway
+            between the two diagonal rows through the centre (10.6 um from each: it passes a dome
+            every 21.2 um, on alternating sides, at a closest gap of 0.69 um), starting midway
+            between two of them. This is the path of a cell crossing the unrotated array along
+            its diagonal, between two diagonal lines of domes.
+Each path's table gives step_over_smallest: the step against the same path's and mode's smallest
+array (the issue's check: 8 x 8 over 3 x 3 with the split <= 3), and amortised_s: (set-up + N
+steps) / N with N = --amortise (the split's background solve is in its set-up, the first frame);
+the cpu_ columns the same in process time (all the process's threads), which other work on a
+shared machine moves less than the wall-clock time.
+--tag names the CSV and chart (frozen_steps_TAG.csv / .png; without, frozen_steps.csv).
 
 suspension: scenes/sedimenting_over_array.toml (64 free cells over 16 x 16 domes): the free
 cells' velocities by the split at --suspension-cutoffs against the full solve (the treecode) at
@@ -21,6 +43,7 @@ step (k = --scene-steps) and memory.
 
     python benchmarks/frozen.py errors [--side 8] [--cutoffs ...] [--positions ...] [--replot]
     python benchmarks/frozen.py steps [--counts 3 8 32] [--steps 5] [--full] [--full-max 8]
+                                      [--paths between along diagonal] [--amortise 100] [--tag NAME]
     python benchmarks/frozen.py suspension [--suspension-cutoffs 0 10e-6 40e-6] [--scene-steps 1]
 """
 
@@ -49,11 +72,67 @@ def row_offset(n: int) -> float:
     return -0.5 * PITCH - PITCH * ((n - 1) // 2)
 
 
-def crossing_overrides(n: int, x: float | None = None) -> list:
+def crossing_overrides(n: int, x: float | None = None, y: float = 0.0, z: float = 6e-6) -> list:
     out = [f"arrays.0.count=[{n},{n}]", f"arrays.0.origin=[0,{row_offset(n)!r},4.5e-6]"]
     if x is not None:
-        out.append(f"bodies.0.position=[{x!r},0.0,6e-6]")
+        out.append(f"bodies.0.position=[{x!r},{y!r},{z!r}]")
     return out
+
+
+PATHS = ("between", "along", "diagonal")
+ALONG_GAP = 1.5e-6  # m: the free cell's lowest point above the domes' top on the path "along"
+DIAGONAL_DEG = 45.0  # the array's rotation for the path "diagonal"
+
+
+def mesh_heights():
+    """(the domes' top above the wall, the free cell's radius), m, from the scene's meshes."""
+    from warpbem.app import scene as scenes
+
+    loaded = scenes.load(SCENE, crossing_overrides(1))
+    free, dome = loaded.bodies[0], loaded.bodies[1]
+    top = dome.position[2] + float(np.asarray(dome.mesh.nodes)[:, 2].max())
+    return top, float(np.linalg.norm(np.asarray(free.mesh.nodes), axis=1).max())
+
+
+def path_case(path: str, n: int) -> tuple[list, dict | None]:
+    """The scene overrides and the layout (``step_case``) of the free cell's ``path`` over an
+    n x n array (module docstring, steps)."""
+    x_mid = PITCH * ((n - 1) // 2) + 0.5 * PITCH  # midway between two columns
+    if path == "between":
+        return crossing_overrides(n, x_mid), None
+    if path == "along":
+        top, radius = mesh_heights()
+        return crossing_overrides(n, x_mid, row_offset(n) + PITCH * ((n - 1) // 2), top + ALONG_GAP + radius), None
+    if path == "diagonal":
+        centre = np.array([0.5 * (n - 1) * PITCH, row_offset(n) + 0.5 * (n - 1) * PITCH])
+        half = 0.5 * PITCH / np.sqrt(2.0)  # half the distance between diagonal rows (10.6 um)
+        x, y = centre + [-half, half]
+        # the scene loads (its placement checked) with the cell at its own start before the array
+        return crossing_overrides(n), dict(rotate_deg=DIAGONAL_DEG, about=centre.tolist(), free=[x, y, 6e-6])
+    raise ValueError(f"unknown path {path!r}: one of {PATHS}")
+
+
+def rotated_array(loaded, degrees: float, about, free=None):
+    """The scene with its fixed bodies turned by ``degrees`` about the vertical through ``about``
+    (x, y; m): positions and orientations; the free cell (body 0) moved to ``free`` (m) if given."""
+    a = np.radians(degrees)
+    c, s = np.cos(a), np.sin(a)
+    turn = np.array([np.cos(a / 2), 0.0, 0.0, np.sin(a / 2)])
+
+    def product(p, q):  # quaternions [w, x, y, z]
+        w1, v1, w2, v2 = p[0], np.asarray(p[1:]), q[0], np.asarray(q[1:])
+        return (w1 * w2 - v1 @ v2, *(w1 * v2 + w2 * v1 + np.cross(v1, v2)))
+
+    bodies = []
+    for b in loaded.bodies:
+        if b.fixed:
+            dx, dy = b.position[0] - about[0], b.position[1] - about[1]
+            b = b._replace(position=(about[0] + c * dx - s * dy, about[1] + s * dx + c * dy, b.position[2]),
+                           orientation=tuple(float(v) for v in product(turn, b.orientation)))
+        elif free is not None and not bodies:
+            b = b._replace(position=tuple(float(v) for v in free))
+        bodies.append(b)
+    return replace(loaded, bodies=tuple(bodies))
 
 
 def errors(args):
@@ -147,39 +226,47 @@ def without_split(options):
     return replace(options, near_far_split="off")
 
 
-def step_case(scene: str, overrides: list, steps: int, split: bool, device: str) -> dict:
+def step_case(scene: str, overrides: list, steps: int, split: bool, device: str, layout: dict | None = None) -> dict:
     """One run in this process: set-up (the first frame), time per step as (T(2k) - T(k)) / k,
-    peak memory."""
+    peak memory. layout: {"rotate_deg": a, "about": [x, y]} turns the fixed bodies (``rotated_array``)."""
     from warpbem.app import scene as scenes
     from warpbem.dynamics import Simulator
+    from warpbem.surfaces.placement import check_placement
 
     loaded = scenes.load(ROOT / "scenes" / scene, overrides)
+    if layout:
+        loaded = rotated_array(loaded, layout["rotate_deg"], layout["about"], layout.get("free"))
+        check_placement(loaded.initial_bodies(), loaded.model.flow.wall)
     model = loaded.model
     if not split:
         model = replace(model, solver=without_split(model.solver))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         sim = Simulator(model, device)
         state = loaded.initial_state()
         sim.frame(state)
-        setup = time.perf_counter() - t0
-        marks = []
+        setup, cpu_setup = time.perf_counter() - t0, time.process_time() - c0
+        marks, cpu = [], []
         for k in range(2 * steps):
             state, frame = sim.step(state)
             marks.append(time.perf_counter() - t0)
+            cpu.append(time.process_time() - c0)
     per_step = (marks[2 * steps - 1] - marks[steps - 1]) / steps
+    cpu_step = (cpu[2 * steps - 1] - cpu[steps - 1]) / steps
+    end = state.positions[0]
     return dict(bodies=model.n_bodies, domes=int(model.fixed_mask.sum()),
+                travel_um=float(np.linalg.norm(end - loaded.bodies[0].position)) * 1e6,
                 elements=int(sum(len(m.elements) for m in model.meshes)), split=split, setup_s=setup,
-                step_s=per_step, first_steps_s=marks[steps - 1] - setup,
-                near=int(len(getattr(sim.solver, "near_bodies", []))), operator=sim.solver.operator,
+                step_s=per_step, cpu_setup_s=cpu_setup, cpu_step_s=cpu_step, first_steps_s=marks[steps - 1] - setup,
+                near=int(len(sim.solver.near_bodies)) if split else int(model.fixed_mask.sum()), operator=sim.solver.operator,
                 peak_gb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6)
 
 
-def run_case(scene: str, overrides: list, steps: int, split: bool, device: str) -> dict:
+def run_case(scene: str, overrides: list, steps: int, split: bool, device: str, layout: dict | None = None) -> dict:
     """``step_case`` in a process of its own (its own peak memory)."""
     command = [sys.executable, __file__, "case", scene, json.dumps(overrides), str(steps),
-               "split" if split else "full", "--device", device]
+               "split" if split else "full", "--device", device, "--layout", json.dumps(layout)]
     done = subprocess.run(command, capture_output=True, text=True, cwd=Path(__file__).parent)
     if done.returncode:
         print(done.stderr[-3000:], file=sys.stderr)
@@ -188,24 +275,72 @@ def run_case(scene: str, overrides: list, steps: int, split: bool, device: str) 
 
 
 STEP_FORMATS = {"setup_s": "{:.1f}", "step_s": "{:.3f}", "first_steps_s": "{:.2f}", "peak_gb": "{:.2f}",
-                "step_over_smallest": "{:.2f}"}
+                "step_over_smallest": "{:.2f}", "amortised_s": "{:.3f}", "travel_um": "{:.1f}",
+                "cpu_setup_s": "{:.1f}", "cpu_step_s": "{:.3f}", "cpu_over_smallest": "{:.2f}",
+                "cpu_amortised_s": "{:.3f}"}
 
 
 def steps(args):
+    """Each path's arrays, each with the split and then (--full) without, side by side."""
     rows = []
-    cases = [(n, True) for n in args.counts] + [(n, False) for n in args.counts if args.full and n <= args.full_max]
-    for n, split in cases:
-        # mid-array, between two columns: the same neighbourhood from 8 x 8 on
-        row = run_case(SCENE.name, crossing_overrides(n, PITCH * ((n - 1) // 2) + 0.5 * PITCH), args.steps, split,
-                       args.device)
-        rows.append(dict(array=f"{n}x{n}", **row))
-        print_table(rows[-1:], STEP_FORMATS)
-    smallest = next(r for r in rows if r["split"] and r["domes"] == min(args.counts) ** 2)
+    for path in args.paths:
+        # each array with the split and then without, side by side (the shared machine's load drifts)
+        cases = [(n, split) for n in args.counts for split in (True, False)
+                 if split or (args.full and n <= args.full_max)]
+        for n, split in cases:
+            overrides, layout = path_case(path, n)
+            row = run_case(SCENE.name, overrides, args.steps, split, args.device, layout)
+            rows.append(dict(path=path, array=f"{n}x{n}", **row))
+            print_table(rows[-1:], STEP_FORMATS)
     for r in rows:
+        same = [q for q in rows if q["path"] == r["path"] and q["split"] == r["split"]]
+        smallest = min(same, key=lambda q: q["domes"])
         r["step_over_smallest"] = r["step_s"] / smallest["step_s"]
+        r["amortised_s"] = (r["setup_s"] + args.amortise * r["step_s"]) / args.amortise
+        if "cpu_step_s" in r:  # process time (all threads): less moved by other work on a shared machine
+            r["cpu_over_smallest"] = r["cpu_step_s"] / smallest["cpu_step_s"]
+            r["cpu_amortised_s"] = (r["cpu_setup_s"] + args.amortise * r["cpu_step_s"]) / args.amortise
     print()
     print_table(rows, STEP_FORMATS)
-    write_csv("frozen_steps.csv", rows)
+    name = f"frozen_steps_{args.tag}" if args.tag else "frozen_steps"
+    print(write_csv(f"{name}.csv", rows))
+    plot_steps(rows, name, args.amortise)
+
+
+def plot_steps(rows, name, amortise):
+    """Per path (colour), split (solid) and not (dashed): the time per step, the step against
+    the smallest array's, and (set-up + N steps) / N against the number of domes."""
+    from warpbem.hydro.frozen import DEFAULT_CUTOFF
+
+    plt = pyplot()
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    paths = list(dict.fromkeys(r["path"] for r in rows))
+    for c, path in enumerate(paths):
+        for split in (True, False):
+            at = sorted((r for r in rows if r["path"] == path and r["split"] == split), key=lambda r: r["domes"])
+            if not at:
+                continue
+            style = dict(color=f"C{c}", ls="-" if split else "--", marker="o" if split else "s",
+                         label=f"{path}, {'split ' + format(DEFAULT_CUTOFF * 1e6, 'g') + ' um' if split else 'no split'}")
+            domes = [r["domes"] for r in at]
+            for ax, key in zip(axes, ("step_s", "step_over_smallest", "amortised_s")):
+                ax.plot(domes, [r[key] for r in at], **style)
+    ticks = sorted({r["domes"] for r in rows})
+    for ax in axes:
+        ax.set_xscale("log")
+        ax.set_xticks(ticks, [str(t) for t in ticks])
+        ax.minorticks_off()
+        ax.set_xlabel("adherent domes (n x n, 30 um pitch)")
+    axes[0].set_yscale("log")
+    axes[0].set_ylabel("time per step [s]")
+    axes[0].set_title("step cost, free cell crossing the array")
+    axes[1].axhline(3.0, color="k", lw=0.8, ls=":", label="3 (issue 23)")
+    axes[1].set_ylabel("step / the smallest array's step")
+    axes[1].set_title("against the smallest array, same path and mode")
+    axes[2].set_yscale("log")
+    axes[2].set_ylabel(f"(set-up + {amortise} steps) / {amortise} [s]")
+    axes[2].set_title(f"set-up amortised over {amortise} steps")
+    print(save_chart(fig, output(f"{name}.png"), axes, legend_size=7))
 
 
 def suspension(args):
@@ -264,7 +399,8 @@ def main():
     if len(sys.argv) > 1 and sys.argv[1] == "case":  # a child process of ``run_case``
         scene, overrides, k, mode = sys.argv[2], json.loads(sys.argv[3]), int(sys.argv[4]), sys.argv[5]
         device = sys.argv[sys.argv.index("--device") + 1] if "--device" in sys.argv else "cpu"
-        print(json.dumps(step_case(scene, overrides, k, mode == "split", device)))
+        layout = json.loads(sys.argv[sys.argv.index("--layout") + 1]) if "--layout" in sys.argv else None
+        print(json.dumps(step_case(scene, overrides, k, mode == "split", device, layout)))
         return
     parser = arguments(__doc__)
     parser.add_argument("what", choices=["errors", "steps", "suspension"])
@@ -277,6 +413,10 @@ def main():
     parser.add_argument("--steps", type=int, default=5)
     parser.add_argument("--full", action="store_true", help="also without the split, up to --full-max")
     parser.add_argument("--full-max", type=int, default=8)
+    parser.add_argument("--paths", nargs="+", choices=PATHS, default=["between"],
+                        help="steps: the free cell's paths (module docstring)")
+    parser.add_argument("--amortise", type=int, default=100, help="steps: N of (set-up + N steps) / N")
+    parser.add_argument("--tag", default="", help="steps: the CSV and chart frozen_steps_TAG")
     parser.add_argument("--scene-steps", type=int, default=1, help="suspension: k of the scene's steps (0: none)")
     parser.add_argument("--suspension-cutoffs", type=float, nargs="+", default=[0.0, 10e-6, 40e-6])
     parser.add_argument("--replot", action="store_true", help="errors: chart the last run's CSV again")
