@@ -137,7 +137,6 @@ from ..surfaces.mesh import Mesh
 from .interior import InteriorElasticity, check_material
 from .shape import nodal_displacement, nodal_weights, shear_plane_deformation
 
-CENTRE_NODE = 8  # of a QUAD9 element (surfaces/quad9.py): its collocation point
 LINEAR_RANGE = 0.2  # max |u| / a past which the linear material is inaccurate (module docstring)
 LINEAR_LIMIT = 0.5  # max |u| / a past which a run stops
 UNRESOLVED_APPROACH = 1e-9  # m: a contact patch narrower than the elements warns past this Hertz approach
@@ -148,7 +147,7 @@ def balanced(mesh: Mesh, traction: np.ndarray, where=None) -> np.ndarray:
     """``traction`` (E, 3, Pa) less the traction a + b x (x - c) over the elements ``where``
     (default: the whole surface; c their centroid) with its force and moment, so that it is in
     equilibrium (an elastic solution exists): the smooth balance of a concentrated load."""
-    centres, areas, size = mesh.element_nodes()[:, 8], mesh.element_areas(), mesh.size()
+    centres, areas, size = mesh.element_nodes()[:, quad9.CENTRE_NODE], mesh.element_areas(), mesh.size()
     where = np.ones(len(areas), bool) if where is None else np.asarray(where, bool)
     arm = (centres - centres[where].T @ areas[where] / areas[where].sum()) / size  # one scale for the least squares
     columns = []
@@ -261,7 +260,7 @@ class Deformation(Interaction):
             return velocities
         out = list(velocities)
         for i in np.flatnonzero(self.deformable):
-            out[i] = part["node_velocity"][i, self.meshes[i].elements[:, CENTRE_NODE]]  # at the collocation points
+            out[i] = part["node_velocity"][i, self.meshes[i].elements[:, quad9.CENTRE_NODE]]  # at the collocation points
         return out
 
     def advance_shape(self, part, start_bodies, start_loads, end_orientations, dt, point_loads):

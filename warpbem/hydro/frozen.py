@@ -45,6 +45,7 @@ import warnings
 import numpy as np
 
 from ..surfaces.gaps import candidate_pairs, outer_radius
+from ..surfaces.quad9 import CENTRE_NODE
 from .mobility import MobilitySolution, MobilitySolver, all_completion_poles, checked_bodies, checked_loads
 from .operators import DoubleLayerOperator, quadrature_strengths
 from .treecode import FarField, TreecodeOptions
@@ -93,7 +94,7 @@ class BackgroundField:
         if geo.n_elements < tree_elements:
             return
         n_qp = geo.qp_positions.shape[1]
-        self.far = FarField(self.operator.kernels, self.operator.device, geo.element_nodes[:, 8], geo.collocation,
+        self.far = FarField(self.operator.kernels, self.operator.device, geo.element_nodes[:, CENTRE_NODE], geo.collocation,
                             np.arange(geo.n_points) // geo.points_per_element, geo.qp_positions.reshape(-1, 3),
                             np.repeat(np.arange(geo.n_elements), n_qp), poles, treecode,
                             cover=np.asarray(cover, dtype=float) / self.length)
