@@ -127,7 +127,7 @@ import warnings
 
 import numpy as np
 
-from ..forces.adhesion import compliance, hertz_radius
+from ..forces import hertz
 from ..forces.interaction import Interaction
 from ..hydro.traction import solve_traction
 from ..surfaces.body import rotation_matrix
@@ -319,13 +319,13 @@ class Deformation(Interaction):
                             " (time.dt_max) keeps the inclination accurate")
 
     def contact_radius(self, body: int, other: int, force: float) -> float:
-        """Hertz radius a = (3 F R* / 4 E*)^(1/3) (m; thesis eq. 4.9) of a contact load F (N)
-        between ``body`` and ``other`` (a body or the wall), 1/R* = sum 1/R and 1/E* = sum (1 -
-        nu^2) / E over the two (the wall and rigid bodies do not yield); 0 if neither yields."""
+        """Hertz radius a (m; thesis eq. 4.9, ``forces/hertz.py``) of a contact load F (N) between
+        ``body`` and ``other`` (a body or the wall), 1/R* = sum 1/R and 1/E* = sum (1 - nu^2) / E
+        over the two (the wall and rigid bodies do not yield); 0 if neither yields."""
         pair = (body,) if other == WALL else (body, other)
-        total = sum(compliance(self.shear_modulus[i], self.poisson_ratio[i]) for i in pair if self.deformable[i])
+        total = sum(hertz.compliance(self.shear_modulus[i], self.poisson_ratio[i]) for i in pair if self.deformable[i])
         curvature = sum(1.0 / self.radii[i] for i in pair)
-        return float(hertz_radius(abs(force), 1.0 / curvature, total))
+        return float(hertz.contact_radius(abs(force), 1.0 / curvature, total))
 
     def _target(self, start_bodies, start_loads, point_loads):
         """(u*, its contact part) of every deformable body: the elastic balance of the start
