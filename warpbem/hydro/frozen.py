@@ -19,11 +19,10 @@ zero on the adherent ones.
 
 What it leaves out: the far cells' answer to the free cell's disturbance, and the free cell's
 to theirs. Above the wall both decay fast (a wall-parallel Stokeslet at height h is felt as
-h z / r^3 along the wall, Blake 1971; a force-free cell's stresslet faster), and on an 8 x 8
-array of domes the largest error of the free cell's velocity over nine positions of its
-crossing fell from 8.5e-3 with no cell near to 3.5e-4 at a cut-off of 30 um, 1.2e-4 at 40 um,
-5e-6 at 90 um and 3.4e-7 at 150 um, about as R^-4 (``benchmarks/frozen.py``, README "Frozen
-adherent arrays"). ``DEFAULT_CUTOFF`` is 40 um, eight times inside 1e-3 there.
+h z / r^3 along the wall, Blake 1971; a force-free cell's stresslet faster): on an 8 x 8
+array of domes the largest error of the free cell's velocity over its crossing falls about as
+R^-4 with the cut-off R, to 1.2e-4 at ``DEFAULT_CUTOFF`` = 40 um, eight times inside 1e-3
+(``benchmarks/frozen.py``, README "Frozen adherent arrays").
 
 The background flow at the free cells' points comes from the solved density through the
 treecode (``treecode.py``): the far field of the whole array at every leaf's Chebyshev points is

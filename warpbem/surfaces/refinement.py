@@ -7,11 +7,11 @@ parameter square, mapped by its own biquadratic geometry, so the surface is unch
 repeatedly up to ``max_levels`` times. The ratio is scaled with the body's own mesh
 (``relative_element_size`` against the k = 4 sphere's): a mesh twice as fine is refined twice
 as finely near contact, so the gap is resolved as the body is and the error near contact falls
-with the mesh instead of stopping at a floor the ratio sets (issue 11: at h/a = 1.1 the normal
-drag stayed at -1.4 % from k = 8 on with a fixed ratio). The refined mesh has hanging nodes,
-which the collocation methods do not mind: the density is discontinuous between elements and
-only the element integrals, areas and collocation points enter. The seed had no such
-refinement; its near-contact motion was "rough" (thesis ch. 3.3).
+with the mesh instead of stopping at a floor a fixed ratio sets (``benchmarks/convergence.py``,
+README "Accuracy near contact"). The refined mesh has hanging nodes, which the collocation
+methods do not mind: the density is discontinuous between elements and only the element
+integrals, areas and collocation points enter. The seed had no such refinement; its
+near-contact motion was "rough" (thesis ch. 3.3).
 """
 
 from __future__ import annotations
