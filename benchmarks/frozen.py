@@ -238,8 +238,8 @@ def step_case(scene: str, overrides: list, steps: int, split: bool, device: str,
         loaded = rotated_array(loaded, layout["rotate_deg"], layout["about"], layout.get("free"))
         check_placement(loaded.initial_bodies(), loaded.model.flow.wall)
     model = loaded.model
-    if not split:
-        model = replace(model, solver=without_split(model.solver))
+    # the split forced on or off: the scene's "auto" would decide by the array's size
+    model = replace(model, solver=replace(model.solver, near_far_split="on") if split else without_split(model.solver))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         t0, c0 = time.perf_counter(), time.process_time()

@@ -123,20 +123,6 @@ def compliant_rolling_chart(path: Path) -> Path | None:
     return save_chart(plt, fig, axes[0][-1], path, legend_size=7)
 
 
-def hertz_surface(rho, contact_radius, radius):
-    """Height (m) above the patch plane of a sphere of radius R pressed to Hertz contact radius
-    a_s, at lateral distance rho, its centre brought down by the approach delta = a_s^2 / R
-    (Johnson 1985, Contact Mechanics, eq. 3.42; the lowering of kernels/bonds.py): zero inside
-    the patch, the undeformed sphere less delta far from it."""
-    rho = np.abs(np.asarray(rho, float))
-    a2, sphere = contact_radius**2, rho**2 / (2 * radius)
-    if contact_radius <= 0:
-        return sphere
-    outside = ((2 * a2 - rho**2) * np.arcsin(np.minimum(contact_radius / np.maximum(rho, 1e-300), 1.0))
-               + contact_radius * np.sqrt(np.maximum(rho**2 - a2, 0.0))) / (np.pi * radius)
-    return np.where(rho <= contact_radius, 0.0, sphere + outside - a2 / radius)
-
-
 def tethered_profile_chart(path: Path) -> Path | None:
     """Thesis fig. 4.3: the profile in the plane of shear (y = 0) of the deformable tethered
     cells at the end of their runs (results/compliant_tether), their lowest region, against the
@@ -144,7 +130,7 @@ def tethered_profile_chart(path: Path) -> Path | None:
     rigid-with-Hertz model puts below its elements)."""
     from warpbem.app.plotting import _pyplot
     from warpbem.app.scene import parse
-    from warpbem.forces.adhesion import hertz_contact_radius
+    from warpbem.forces import hertz
     from warpbem.surfaces.body import rotation_matrix
 
     runs = sorted((ROOT / "results" / "compliant_tether").glob("point*.h5"))
@@ -171,10 +157,10 @@ def tethered_profile_chart(path: Path) -> Path | None:
         line, = ax.plot((shaped[low, 0][order] - position[0]) * 1e6, shaped[low, 2][order] * 1e9, "o-", ms=3, lw=1.5,
                         label=f"{label}: deformable mesh (y = 0 nodes)")
         rho, bottom = np.linspace(-2.5e-6, 2.5e-6, 401), position[2] - radius
-        patch = hertz_contact_radius(force, radius, modulus, nu)
+        patch = hertz.contact_radius(force, radius, hertz.compliance(modulus, nu))
         # as the rigid-with-Hertz model places it (kernels/bonds.py): the flat on the plane of the
         # closest point, the rest brought down by up to the approach delta = a_s^2 / R
-        ax.plot(rho * 1e6, (bottom + hertz_surface(rho, patch, radius)) * 1e9, "--", color=line.get_color(), lw=1,
+        ax.plot(rho * 1e6, (bottom + hertz.surface_height(rho, patch, radius)) * 1e9, "--", color=line.get_color(), lw=1,
                 label=f"{label}: Hertz surface, a_s = {patch * 1e6:.2g} um (eq. 4.9)")
     ax.plot(rho * 1e6, (bottom + rho**2 / (2 * radius)) * 1e9, ":", color="0.4", lw=1, label="undeformed sphere (last run)")
     ax.set(xlabel="x - X [um] (flow direction)", ylabel="height above the wall [nm]", ylim=(0, 1000),

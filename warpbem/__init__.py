@@ -1,9 +1,10 @@
-"""warpbem: boundary-element Stokes flow of rigid (and, later, elastic) cells above a no-slip
+"""warpbem: boundary-element Stokes flow of rigid and linearly elastic cells above a no-slip
 wall, on NVIDIA Warp. Importing the package compiles nothing and touches no device.
 
 Layers (each imports only those before it): ``surfaces`` (meshes, bodies, gaps) ->
-``hydro`` (operators, GMRES, mobility) and ``forces`` (interactions) -> ``dynamics`` (Model,
-State, the step) -> ``app`` (scene files, runs, sweeps, output, command line)."""
+``hydro`` (operators, GMRES, mobility) and ``forces`` (interactions) -> ``elastic`` (interior
+elasticity, deformable cells) -> ``dynamics`` (Model, State, the step) -> ``app`` (scene files,
+runs, sweeps, output, command line)."""
 
 from . import units
 from .elastic.deformable import DeformationError, DeformationWarning

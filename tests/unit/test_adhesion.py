@@ -8,7 +8,8 @@ import pytest
 
 import warpbem as wb
 from warpbem.app import scene
-from warpbem.forces.adhesion import BOLTZMANN, Adhesion, BondOptions, contact_traction, hertz_contact_radius
+from warpbem.forces import hertz
+from warpbem.forces.adhesion import BOLTZMANN, Adhesion, BondOptions
 from warpbem.surfaces.body import Body
 from warpbem.surfaces.gaps import Contacts, GapFinder
 from tests.scene_points import sweep_scenes
@@ -49,13 +50,17 @@ def test_hertz_contact_radius_is_eq_4_9():
     cell of G = 4 kPa, nu = 0.33 gives E = 10.64 kPa, E* = 11.94 kPa, a_s = 0.3155 um
     (hand-computed), and a_s grows as F^(1/3) a^(1/3) G^(-1/3); the traction of eq. 4.8 is
     -3 F / (2 pi a_s^2)."""
-    a_s = hertz_contact_radius(1e-10, 5e-6, 4e3, 0.33)
+
+    def on_wall(force, shear_modulus):  # a 5 um cell of nu = 0.33 on the rigid wall
+        return hertz.contact_radius(force, 5e-6, hertz.compliance(shear_modulus, 0.33))
+
+    a_s = on_wall(1e-10, 4e3)
     assert a_s == pytest.approx((3 * 1e-10 * 5e-6 / (4 * 10640.0 / (1 - 0.33**2))) ** (1 / 3), rel=1e-12)
     assert a_s == pytest.approx(0.3155e-6, rel=1e-3)
-    assert hertz_contact_radius(8e-10, 5e-6, 4e3, 0.33) == pytest.approx(2 * a_s, rel=1e-12)
-    assert hertz_contact_radius(1e-10, 5e-6, 32e3, 0.33) == pytest.approx(a_s / 2, rel=1e-12)
-    assert hertz_contact_radius(-1e-10, 5e-6, 4e3, 0.33) == 0.0  # no pull, no contact
-    assert contact_traction(1e-10, a_s) == pytest.approx(-3e-10 / (2 * np.pi * a_s**2))
+    assert on_wall(8e-10, 4e3) == pytest.approx(2 * a_s, rel=1e-12)
+    assert on_wall(1e-10, 32e3) == pytest.approx(a_s / 2, rel=1e-12)
+    assert on_wall(-1e-10, 4e3) == 0.0  # no pull, no contact
+    assert hertz.contact_traction(1e-10, a_s) == pytest.approx(-3e-10 / (2 * np.pi * a_s**2))
 
 
 def test_patch_lowering_is_johnsons_hertz_surface():
@@ -79,6 +84,8 @@ def test_patch_lowering_is_johnsons_hertz_surface():
     wp.launch(lowering, dim=len(rho), inputs=[wp.array(rho, dtype=wp.float64), a, radius, out])
     got = out.numpy()
     np.testing.assert_allclose(got[:3], -rho[:3] ** 2 / (2 * radius), rtol=1e-12)
+    # the host form (hertz.surface_height, the charts') is the sphere lowered by the same profile
+    np.testing.assert_allclose(hertz.surface_height(rho, a, radius), rho**2 / (2 * radius) + got, rtol=1e-12, atol=1e-20)
     # u(rho) of the Hertz pressure by quadrature: u = (1 / (pi E*)) int p(r') dA' / |x - x'|,
     # with E* from p0 = 2 E* a / (pi R) (Johnson eq. 4.23): u = 2 a / (pi^2 R) int sqrt(1 - r^2/a^2) / |x - x'| dA'
     r, w = np.polynomial.legendre.leggauss(200)

@@ -187,7 +187,8 @@ def test_unresolved_contacts_warn_once_naming_the_bodies():
     solve there takes thousands of elements)."""
     import warnings
 
-    from warpbem.surfaces.refinement import WALL, WARN_FRACTION, refine_near_contact
+    from warpbem.surfaces.gaps import WALL
+    from warpbem.surfaces.refinement import WARN_FRACTION, refine_near_contact
 
     sphere = wb.mesh.sphere(1.0, 4)
     bare = wb.SolverOptions(contact_refinement=0.0)

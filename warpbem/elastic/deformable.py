@@ -1,124 +1,66 @@
 """Deformable cells in time: linear elasticity relaxing through the fluid (thesis ch. 2.2 C,
 ch. 2.3; Roscoe 1967 J. Fluid Mech. 28:273).
 
-Kinematics. A deformable cell's surface at a state is its rigid placement (position x_c,
-orientation R) of its reference mesh displaced in its body frame:
+Kinematics. A deformable cell's surface is its reference mesh displaced in its body frame and
+placed rigidly, x = x_c + R (X + u(X)), u the node displacement (``nodal_displacement`` of the
+element values, ``shape.py``). The body frame is the material's: R turns with the cell's rigid
+rotation, so material points X circulate around a steady shape (tank-treading, thesis fig. 2.12).
 
-    x = x_c + R (X + u(X)),
+Target. The traction on every body at the step's start state (``solve_traction``, closed by
+each body's total load over the step, ``Evaluation.step_loads``), turned into the body frame,
+gives through the interior elastic problem on the reference mesh (eq. 2.26-2.31,
+``interior.py``) the displacement u* = E[R_n^T t_n] that balances it. A body load (gravity, an
+applied force) has no surface traction; it is balanced by the smooth traction a + b x (x - c)
+with its force and moment (``balanced``). ``update_interval`` = m > 1 re-solves u* every m-th
+step only and relaxes towards the kept one (body frame) in between.
 
-u the node displacement of the state (``nodal_displacement`` of the element values). The body
-frame is the material's: R turns with the cell's rigid rotation, so the reference points X
-(material points) circulate around a steady shape (tank-treading, thesis fig. 2.12) while u
-keeps the shape. The mobility is solved on the deformed surface, moving as described under
-"Surface motion" below.
+Relaxation (``relaxation = True``). The fluid resists the surface's motion: for a sphere in a
+linear flow (Roscoe 1967, after Taylor 1932) the fluid traction on a surface moving with strain
+rate e is 5 mu E.n - 3 mu e.n and the elastic one 2 G eps.n, so d eps / dt = (eps* - eps) / tau,
+tau = 3 mu / (2 G). The model moves every cell's displacement by that law, exactly over a step
+for a target held over it: u_(n+1) = u* + (u_n - u*) exp(-dt / tau). In unbounded shear this is
+Roscoe's steady state, D = 5 Ca / (2 sqrt(4 + 9 Ca^2)) at (1/2) atan(2 / (3 Ca)) = pi/4 - 3 Ca /
+4 + O(Ca^3) from the flow (Ca = mu gdot / G); ``relaxation = False`` takes u_(n+1) = u*, the
+quasi-static limit tau -> 0 (D = 5 Ca / 4 at pi/4). The target's traction is the rigid
+shape's: the surface motion's own traction is what tau models.
 
-Elastic target. At a step the traction the fluid exerts on every body at the start state
-(``solve_traction``, closed by each body's total external load over the step,
-``Evaluation.step_loads``), turned into the body frame, gives through the interior elastic problem on the
-reference mesh (``interior.py``) the displacement u* = E[R_n^T t_n] that would balance it.
+Surface motion (``surface_velocity = True``). The mobility problem is solved on the deformed
+surface with the slip w = R du/dt on top of the rigid motion (``Body.surface_velocity``), du/dt
+the displacement's mean rate over the last step, (u_(n+1) - u_n) / dt, which keeps the
+tank-treading slip of stiff cells (tau << dt). A tank-treading cell's surface then slides along
+its steady shape instead of turning with it, which lifts it off the wall (Smart & Leighton
+1991; Abkarian, Lartigue & Viallat 2002); solved as rigid at the instant (``surface_velocity =
+False``) it drifts towards the wall (scenes/README.md). A target that jumps (a cell released
+undeformed, a bond formed) puts its jump into one step's slip.
 
-Relaxation (``relaxation = True``, the default). The cell does not reach u* at once: as its
-surface moves the fluid resists. For a sphere in a linear flow (Roscoe 1967; the Taylor
-1932 calculation for a drop) the fluid traction on a surface moving with the strain rate e is
-5 mu E.n - 3 mu e.n and the elastic one 2 G eps.n, so in the material frame
+Contacts. The shape the contact laws see (the gaps of the repulsion, eq. 3.1, the adhesion's
+reach and receptor tips) and the slip leave out the cell's response to its own loads,
+``contact_displacement``: the elastic response to all its contact, bond and body loads with the
+fluid's answer to them (``solve_traction`` ``load_response``, one more solve on the same
+operator). Counted in the gaps, that response would act a step late and close a loop of gain ~
+(the law's stiffness) x (the cell's compliance under the load); the contact's own compliance is
+the law's instead (the steric spring of the roughness layers, the bond's spring, the Hertz patch
+below the elements). All loads are left out together: the body loads' fluid answer alone would
+open the gap of a cell they press on the wall. The flow sees the whole displacement. Contact
+and bond loads act at their points (``ImplicitCoordinates.point_loads``), spread over their
+Hertz patch (eq. 4.8-4.9, ``forces/hertz.py``); receptors ride on the surface point under them,
+and the Hertz patch of the bonds' normal force still flattens the tips inside it, as on rigid
+cells. Mobility snapshots serve a state while max |u| is within their tolerance (``keeps_shape``).
 
-    d eps / dt = (5 mu E - 2 G eps) / (3 mu) = (eps* - eps) / tau,    tau = 3 mu / (2 G),
-
-and the model takes every cell's displacement along the same law, exactly over a step for a
-target held over it:
-
-    u_(n+1) = u* + (u_n - u*) exp(-dt / tau).
-
-For a sphere in unbounded shear this gives Roscoe's linear steady state, D = 5 Ca / (2 sqrt(4
-+ 9 Ca^2)) with its long axis at (1/2) atan(2 / (3 Ca)) = pi/4 - 3 Ca / 4 + O(Ca^3) from the
-flow (Ca = mu gdot / G). ``relaxation = False`` takes u_(n+1) = u* (quasi-static: D = 5 Ca /
-4 at pi/4, the limit tau -> 0, which the relaxing model reaches by itself for stiff cells:
-tau = 0.4 us for G = 4 kPa).
-
-Surface motion (``surface_velocity = True``, the default). The flow sees the deformed surface
-moving as the material does: on top of the rigid motion (U, Omega) each element's surface moves
-with w = R du/dt (body frame du/dt), the slip of the mobility solve (``Body.surface_velocity``, its non-rigid part). A tank-treading cell's surface
-then slides along its steady shape instead of turning with it as a rigid body would; this is
-what lifts a deformed cell off the wall (the drift of drops, capsules and vesicles in wall shear:
-Smart & Leighton 1991; Abkarian, Lartigue & Viallat 2002). ``surface_velocity = False`` solves
-the deformed shape as rigid at the instant (it then drifts towards the wall, a finding of
-scenes/README.md). du/dt is the displacement's mean rate over the last step, (u_(n+1) - u_n) /
-dt: for a cell with tau << dt that is the rate of its target, which in steady tank-treading
-turns backwards in the body frame at the cell's spin (the slip that lifts it); a target that
-jumps (a cell released undeformed, a bond formed) puts its jump into the step's slip, its
-integrated effect (the surface moves by the jump within tau; spread over the step it moved a
-stiff cell released undeformed at 1.9 % of its velocity in its first step). The rate at the end
-state, (u* - u) / tau, would miss the tank-treading slip of stiff cells (tried: a 0.5 kPa cell
-then drifted towards the wall as a rigid one). It lags the traction by a step (first order in
-dt). The response to a cell's own loads is left out of the slip, as it is
-out of the gaps (below: contacts): with it, a cell pressed on the wall flattened by 5.7 nm in its
-first step, the slip of that flattening drove its centre towards the wall, and the contact law,
-which sees the gap without the flattening, answered with 1.3 uN. A cell released undeformed
-takes its shape in its first step, whose slip moves it then (a 0.5 kPa cell on the wall at
-1.45 x its velocity for that step only). The traction of the target is
-still the rigid shape's, the surface motion's own traction being what tau models.
-
-Adhesion (``forces/adhesion.py``). A deformable cell's receptors ride on its surface as the gaps
-see it (below: contacts): each tip moves with the displacement of the surface point under it
-(the microvillus keeps its reference direction), and each bond's force acts at its tip
-(``ImplicitCoordinates.points``), spread like the contact loads. Below the elements, the Hertz
-patch of the bonds' normal force (thesis eq. 4.9) still flattens the tips inside it (Johnson's
-surface displacement, as on the rigid cells with a Hertz patch): the mesh carries the cell's
-shape on its own scale, Hertz the contact below it. Mobility snapshots (the adhesion's reuse of
-the flow solves on a lattice of heights) serve a state while max |u| stays within their
-tolerance (``keeps_shape``; 2 nm by default, the lattice's own spacing); a cell that deforms
-more is solved at every state.
-
-``update_interval`` = m > 1 re-solves the target every m-th step only and relaxes towards the
-kept one (body frame) in between (model no more than the scene needs: a slow, stiff cell).
-
-Limits. Linear elasticity (small strains: D << 1). tau is the sphere's for its strain (l = 2)
-mode in unbounded fluid: other modes, other shapes and the wall change the fluid's resistance
-to deformation (a thin gap resists more); the cell's own internal viscosity is not modelled.
-The target lags the traction by one step (first order in dt): it is solved at the start and
-carried by the step's rotation, so a cell spinning at Omega shows its inclination Omega dt
-behind. The traction is the fluid's and the contact loads' over the step (the implicit forces of
-the step's end where they act on the surfaces, ``ImplicitCoordinates.point_loads``: the
-repulsion's), each spread over its Hertz patch (thesis eq. 4.8-4.9); a patch narrower than
-the elements lands on the nearest one, so the mesh, not Hertz, sets the contact's resolution.
-A body load (gravity, an applied force) has no surface traction: the surface traction is out of
-balance by it, and the elastic problem takes it balanced by the traction a + b x (x - c) over
-the whole surface with its force and moment (``balanced``: the smooth stand-in for the body
-load). The film between close surfaces is in the fluid traction as far as the mesh resolves
-the gap; no lubrication formula is added on top (``forces/lubrication.py``).
-
-Contacts. The shape the contact laws see (the gaps of the repulsion of thesis eq. 3.1, the
-adhesion's reach and its receptor tips) and the slip above leave out the cell's response to its
-own loads: ``contact_displacement``, the elastic response to every load on the cell (contact
-and bond point loads, body loads) together with the fluid's answer to them, the traction of the
-loads acting without the flow (``solve_traction`` ``load_response``, one more GMRES solve on the
-same operator; computed while the cell has contact or bond loads). What remains is the shape
-the ambient flow gives the force-free cell: its strain, tank-treading and the lubrication film
-of the cells' approach in the flow (thesis ch. 3). The flow sees the whole displacement. The
-contact's own compliance is then the law's (eq. 3.1 is the steric spring of the roughness
-layers; the bond's spring; the Hertz patch below the elements). Counted in the gaps, it is
-explicit a step late and closes a loop of gain ~ (the law's stiffness) x (the cell's compliance
-under the load): (1) the load's own flattening, 2 /nm x 1-6 nm in the repulsion of a rolling
-4 kPa cell at 320 pN, threw its contact force to 7 nN in one step; (2) the fluid's answer to it
-(the film's pressure under a cell a load pulls or pushes, which deforms it as much as the load
-does), 0.1 N/m x ~400 m/N on a 0.5 kPa cell on stiff bonds (thesis fig. 4.3), threw that cell
-off its bonds within 0.8 ms (measured; README, "Where the deformable model fails"). Leaving out
-only (1) also counts the body loads' fluid answer without the contact that holds them (a cell
-pressed on the wall by 350 pN then saw its gap open by the film of a fall that does not happen),
-hence all loads together.
-
-Where it fails, and what the solver does there (measured: README, "Stability of deformable
-cells"). The displacement's amplitude, max |u| / a (a the equivalent radius), past
-``LINEAR_RANGE`` (0.2: D ~ 0.2, where a neo-Hookean cell's stress departs from Hooke's by ~D / 2
-= 10 %) gives a ``DeformationWarning``, once per body; past ``LINEAR_LIMIT`` (0.5), or where the
-deformed surface folds (an element's normal at one of its nodes turned more than 90 degrees
-from the reference one; the traction solve then stalls), the run stops with a
-``DeformationError`` that names the body and the way out (a sphere in unbounded shear folds at
-Ca ~ 1, after max |u| / a passes 0.9). A step that turns the cell by more than
-``ROTATION_PER_STEP`` (0.1 rad) warns: the target lags the material by about half the turn (the
-tilt from 45 degrees, 3 Ca / 4, is then off by its own size at dt ~ tau). A contact patch narrower
-than the cell's elements warns once (if its Hertz approach a^2 / R passes 1 nm): the mesh, not
-Hertz, sets the flattening there.
+Assumptions and limits. Linear elasticity (small strains: D << 1). tau is the sphere's for its
+l = 2 mode in unbounded fluid (other modes and shapes, and the wall, change the resistance); the
+cell's internal viscosity is not modelled. The target lags the traction by one step (first
+order in dt: a cell spinning at Omega shows its inclination Omega dt behind). The film between
+close surfaces is in the fluid traction as far as the mesh resolves the gap, with no
+lubrication formula on top; a Hertz patch narrower than the elements lands on the nearest one,
+so the mesh, not Hertz, sets the contact's resolution. The solver warns (``DeformationWarning``,
+once per body) past max |u| / a = ``LINEAR_RANGE`` (0.2, a the equivalent radius: D ~ 0.2,
+where a neo-Hookean stress departs from Hooke's by ~D / 2 = 10 %), for a turn per step over
+``ROTATION_PER_STEP`` (the target then lags by about half of it) and for an unresolved patch
+whose Hertz approach a^2 / R passes 1 nm; it stops (``DeformationError``, naming the body and the
+way out) past ``LINEAR_LIMIT`` (0.5) or where the surface folds (a node normal turned over 90
+degrees from the reference one; a sphere in unbounded shear folds at Ca ~ 1; README,
+"Stability of deformable cells").
 """
 
 from __future__ import annotations
@@ -128,7 +70,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..forces.adhesion import compliance, hertz_radius
+from ..forces import hertz
 from ..forces.interaction import Interaction
 from ..hydro.options import SolverOptions
 from ..options import option, validate
@@ -140,7 +82,6 @@ from ..surfaces.mesh import Mesh
 from .interior import InteriorElasticity, check_material
 from .shape import nodal_displacement, nodal_weights, shear_plane_deformation
 
-CENTRE_NODE = 8  # of a QUAD9 element (surfaces/quad9.py): its collocation point
 LINEAR_RANGE = 0.2  # max |u| / a past which the linear material is inaccurate (module docstring)
 LINEAR_LIMIT = 0.5  # max |u| / a past which a run stops
 UNRESOLVED_APPROACH = 1e-9  # m: a contact patch narrower than the elements warns past this Hertz approach
@@ -151,7 +92,7 @@ def balanced(mesh: Mesh, traction: np.ndarray, where=None) -> np.ndarray:
     """``traction`` (E, 3, Pa) less the traction a + b x (x - c) over the elements ``where``
     (default: the whole surface; c their centroid) with its force and moment, so that it is in
     equilibrium (an elastic solution exists): the smooth balance of a concentrated load."""
-    centres, areas, size = mesh.element_nodes()[:, 8], mesh.element_areas(), mesh.size()
+    centres, areas, size = mesh.element_nodes()[:, quad9.CENTRE_NODE], mesh.element_areas(), mesh.size()
     where = np.ones(len(areas), bool) if where is None else np.asarray(where, bool)
     arm = (centres - centres[where].T @ areas[where] / areas[where].sum()) / size  # one scale for the least squares
     columns = []
@@ -275,7 +216,7 @@ class Deformation(Interaction):
             return velocities
         out = list(velocities)
         for i in np.flatnonzero(self.deformable):
-            out[i] = part["node_velocity"][i, self.meshes[i].elements[:, CENTRE_NODE]]  # at the collocation points
+            out[i] = part["node_velocity"][i, self.meshes[i].elements[:, quad9.CENTRE_NODE]]  # at the collocation points
         return out
 
     def advance_shape(self, part, start_bodies, start_loads, end_orientations, dt, point_loads):
@@ -310,7 +251,7 @@ class Deformation(Interaction):
             warnings.warn(message, DeformationWarning, stacklevel=4)
 
     def _check(self, i, displacement, start_orientation, end_orientation, dt):
-        """Stop or warn where the model fails (module docstring: where it fails)."""
+        """Stop or warn where the model fails (module docstring: assumptions and limits)."""
         nodes = self.meshes[i].nodes
         amplitude = np.linalg.norm(displacement[:len(nodes)], axis=1).max() / self.radii[i]
         turn = np.einsum("eqi,eqi->eq", self._node_normals(nodes + displacement[:len(nodes)], i), self.normals[i])
@@ -334,13 +275,13 @@ class Deformation(Interaction):
                             " (time.dt_max) keeps the inclination accurate")
 
     def contact_radius(self, body: int, other: int, force: float) -> float:
-        """Hertz radius a = (3 F R* / 4 E*)^(1/3) (m; thesis eq. 4.9) of a contact load F (N)
-        between ``body`` and ``other`` (a body or the wall), 1/R* = sum 1/R and 1/E* = sum (1 -
-        nu^2) / E over the two (the wall and rigid bodies do not yield); 0 if neither yields."""
+        """Hertz radius a (m; thesis eq. 4.9, ``forces/hertz.py``) of a contact load F (N) between
+        ``body`` and ``other`` (a body or the wall), 1/R* = sum 1/R and 1/E* = sum (1 - nu^2) / E
+        over the two (the wall and rigid bodies do not yield); 0 if neither yields."""
         pair = (body,) if other == WALL else (body, other)
-        total = sum(compliance(self.shear_modulus[i], self.poisson_ratio[i]) for i in pair if self.deformable[i])
+        total = sum(hertz.compliance(self.shear_modulus[i], self.poisson_ratio[i]) for i in pair if self.deformable[i])
         curvature = sum(1.0 / self.radii[i] for i in pair)
-        return float(hertz_radius(abs(force), 1.0 / curvature, total))
+        return float(hertz.contact_radius(abs(force), 1.0 / curvature, total))
 
     def _target(self, start_bodies, start_loads, point_loads):
         """(u*, its contact part) of every deformable body: the elastic balance of the start

@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..surfaces.mesh import Mesh
+from ..surfaces.quad9 import CENTRE_NODE
 
 
 def nodal_weights(mesh: Mesh):
@@ -29,7 +30,7 @@ def nodal_weights(mesh: Mesh):
     builds it once."""
     from scipy.sparse import csr_matrix
 
-    centres = mesh.element_nodes()[:, 8]
+    centres = mesh.element_nodes()[:, CENTRE_NODE]
     scale = mesh.size()
     holders = [[] for _ in mesh.nodes]
     for e, element in enumerate(mesh.elements):

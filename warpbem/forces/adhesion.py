@@ -30,13 +30,12 @@ Model, written down (SI):
   (``dynamics/implicit.py``), so the step is set by the kinetics, k dt <= ``kinetics_fraction``
   (``longest_step``), not by the spring stiffness.
 * Contact (ch. 4.2): after each step the normal component of the cell's bond forces,
-  F = max(0, -sum F_z), gives the Hertz contact radius a_s = (3 F a / (4 E*))^(1/3), E* =
-  E / (1 - nu^2), E = 2 G (1 + nu) (eq. 4.9; a the cell's equivalent radius); tips within the
-  patch are flattened onto it (``kernels/bonds.py``), so the receptors inside the contact area
-  are those within reach. Before any bond has formed a_s = 0 and the receptors within reach are
-  those of the cap that comes within lambda + layer of the wall (the thesis's first-step
-  anchoring). Rigid cells (no shear modulus) keep a_s = 0. ``contact_traction`` gives eq. 4.8
-  for the deformation issue.
+  F = max(0, -sum F_z), gives the Hertz contact radius a_s = (3 F a / (4 E*))^(1/3) on the
+  rigid wall, E* = E / (1 - nu^2), E = 2 G (1 + nu) (eq. 4.9, ``hertz.py``; a the cell's
+  equivalent radius); tips within the patch are flattened onto it (``kernels/bonds.py``), so the
+  receptors inside the contact area are those within reach. Before any bond has formed a_s = 0
+  and the receptors within reach are those of the cap that comes within lambda + layer of the
+  wall (the thesis's first-step anchoring). Rigid cells (no shear modulus) keep a_s = 0.
 * Cap: at most ``max_bonds`` per cell, which is also the size of each cell's bond table.
 """
 
@@ -51,6 +50,7 @@ from .. import runtime
 from ..options import OptionError, declared, option, validate
 from ..surfaces import quad9
 from ..surfaces.gaps import WALL, bounding_spheres
+from . import hertz
 from .interaction import ImplicitCoordinates, Interaction
 from .repulsion import Repulsion
 
@@ -101,27 +101,6 @@ class BondOptions:
             self, roughness=cell_roughness if self.roughness is None else self.roughness,
             ligand_layer=wall_roughness if self.ligand_layer is None else self.ligand_layer,
             cell_ligand_layer=cell_roughness if self.cell_ligand_layer is None else self.cell_ligand_layer)
-
-
-def compliance(shear_modulus, poisson_ratio):
-    """(1 - nu^2) / E (1/Pa), E = 2 G (1 + nu): a body's share of 1 / E* in Hertz's contact."""
-    return (1.0 - poisson_ratio**2) / (2.0 * shear_modulus * (1.0 + poisson_ratio))
-
-
-def hertz_radius(normal_force, effective_radius, total_compliance):
-    """a = (3 F R* / (4 E*))^(1/3) (thesis eq. 4.9), 1 / E* the sum of the bodies' compliances."""
-    return np.cbrt(3.0 * np.maximum(normal_force, 0.0) * effective_radius * total_compliance / 4.0)
-
-
-def hertz_contact_radius(normal_force, radius, shear_modulus, poisson_ratio):
-    """a_s of a cell on the rigid wall: R* = a, E* = E / (1 - nu^2), E = 2 G (1 + nu) (eq. 4.9)."""
-    return hertz_radius(normal_force, radius, compliance(shear_modulus, poisson_ratio))
-
-
-def contact_traction(normal_force, contact_radius):
-    """The normal traction of thesis eq. 4.8, t0 = -3 F / (2 pi a_s^2) (Pa), the Hertz pressure's
-    peak, for the traction problem of a deformable cell."""
-    return -3.0 * normal_force / (2.0 * np.pi * contact_radius**2)
 
 
 def sample_receptors(mesh, density: float, roughness: float, rng):
@@ -514,7 +493,9 @@ class Adhesion(Interaction):
         counts[self.cells] = count
         compliant = self.shear_modulus > 0
         modulus = np.where(compliant, self.shear_modulus, 1.0)
-        radius = np.where(compliant, hertz_contact_radius(normal, self.radius, modulus, self.poisson_ratio), 0.0)
+        # on the rigid, flat wall: R* = the cell's radius, 1 / E* the cell's compliance
+        patch = hertz.contact_radius(normal, self.radius, hertz.compliance(modulus, self.poisson_ratio))
+        radius = np.where(compliant, patch, 0.0)
         return {"receptor": receptor.numpy().astype(float), "anchor": anchor.numpy().astype(float),
                 "offset": offset.numpy(), "partner": partner.numpy().astype(float), "birth": birth.numpy(),
                 "count": counts, "contact_radius": radius,

@@ -19,11 +19,10 @@ zero on the adherent ones.
 
 What it leaves out: the far cells' answer to the free cell's disturbance, and the free cell's
 to theirs. Above the wall both decay fast (a wall-parallel Stokeslet at height h is felt as
-h z / r^3 along the wall, Blake 1971; a force-free cell's stresslet faster), and on an 8 x 8
-array of domes the largest error of the free cell's velocity over nine positions of its
-crossing fell from 8.5e-3 with no cell near to 3.5e-4 at a cut-off of 30 um, 1.2e-4 at 40 um,
-5e-6 at 90 um and 3.4e-7 at 150 um, about as R^-4 (``benchmarks/frozen.py``, README "Frozen
-adherent arrays"). ``DEFAULT_CUTOFF`` is 40 um, eight times inside 1e-3 there.
+h z / r^3 along the wall, Blake 1971; a force-free cell's stresslet faster): on an 8 x 8
+array of domes the largest error of the free cell's velocity over its crossing falls about as
+R^-4 with the cut-off R, to 1.2e-4 at ``DEFAULT_CUTOFF`` = 40 um, eight times inside 1e-3
+(``benchmarks/frozen.py``, README "Frozen adherent arrays").
 
 The background flow at the free cells' points comes from the solved density through the
 treecode (``treecode.py``): the far field of the whole array at every leaf's Chebyshev points is
@@ -45,6 +44,7 @@ import warnings
 import numpy as np
 
 from ..surfaces.gaps import candidate_pairs, outer_radius
+from ..surfaces.quad9 import CENTRE_NODE
 from .mobility import MobilitySolution, MobilitySolver, all_completion_poles, checked_bodies, checked_loads
 from .operators import DoubleLayerOperator, quadrature_strengths
 from .options import DEFAULT_CUTOFF
@@ -90,7 +90,7 @@ class BackgroundField:
         if geo.n_elements < tree_elements:
             return
         n_qp = geo.qp_positions.shape[1]
-        self.far = FarField(self.operator.kernels, self.operator.device, geo.element_nodes[:, 8], geo.collocation,
+        self.far = FarField(self.operator.kernels, self.operator.device, geo.element_nodes[:, CENTRE_NODE], geo.collocation,
                             np.arange(geo.n_points) // geo.points_per_element, geo.qp_positions.reshape(-1, 3),
                             np.repeat(np.arange(geo.n_elements), n_qp), poles, treecode,
                             cover=np.asarray(cover, dtype=float) / self.length)

@@ -34,7 +34,7 @@ class SurfaceGeometry:
     qp_positions: np.ndarray  # (E, Q, 3)
     qp_area_vectors: np.ndarray  # (E, Q, 3) outward normal * Jacobian * weight
     order: int
-    unresolved_contacts: dict  # {(body, neighbour or refinement.WALL): gap}, scaled units
+    unresolved_contacts: dict  # {(body, neighbour or gaps.WALL): gap}, scaled units
     density_order: int  # p
     collocation: np.ndarray  # (N, 3) collocation points, N = E p^2
     collocation_normals: np.ndarray  # (N, 3) unit outward normals there
@@ -57,9 +57,9 @@ class SurfaceGeometry:
         element_nodes = np.concatenate(nodes)
         stops = np.cumsum(counts)
         positions, area_vectors = quad9.surface_quadrature(element_nodes, order)
-        centre = element_nodes[:, 8]
+        centre = element_nodes[:, quad9.CENTRE_NODE]
         m = density_order**2
-        if density_order == 1:  # the element centres (node 8 exactly) and areas
+        if density_order == 1:  # the element centres (the centre nodes exactly) and areas
             collocation, normals = centre, quad9.centre_normals(element_nodes)
             areas = np.linalg.norm(area_vectors, axis=-1).sum(axis=1)
         else:
@@ -174,7 +174,7 @@ class SurfaceGeometry:
         surf.pole_normals = vectors(self.collocation_normals)
         surf.nodes = vectors(self.element_nodes)
         # p = 1: the collocation points are the centre nodes
-        surf.centres = surf.poles if self.density_order == 1 else vectors(self.element_nodes[:, 8])
+        surf.centres = surf.poles if self.density_order == 1 else vectors(self.element_nodes[:, quad9.CENTRE_NODE])
         surf.radii = scalars(self.element_radius)
         surf.qp_pos = vectors(self.qp_positions)
         surf.qp_area = vectors(self.qp_area_vectors)

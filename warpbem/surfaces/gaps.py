@@ -15,8 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import runtime
+from .quad9 import CENTRE_NODE
 
-WALL = -1
+WALL = -1  # the id of the wall where a body index is expected (pairs, gaps, contact lists)
 BOUND_FACTOR = 1.15
 
 
@@ -35,7 +36,7 @@ class Gap:
 
 def bounding_spheres(element_nodes):
     """Centre nodes (E, 3) and radii (E,) of spheres that hold each element (BOUND_FACTOR)."""
-    centres = element_nodes[:, 8]
+    centres = element_nodes[:, CENTRE_NODE]
     radii = BOUND_FACTOR * np.linalg.norm(element_nodes - centres[:, None], axis=-1).max(axis=1)
     return centres, radii
 

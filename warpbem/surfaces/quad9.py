@@ -23,6 +23,9 @@ REFERENCE_NODES = np.array(
     [[-1, -1], [1, -1], [1, 1], [-1, 1], [0, -1], [1, 0], [0, 1], [-1, 0], [0, 0]], dtype=float
 )
 
+# the centre node of the 9-node element, (s, t) = (0, 0): the constant density's collocation point
+CENTRE_NODE = 8
+
 
 def _lagrange_1d(u):
     """Quadratic Lagrange basis on the nodes -1, 0, 1 and its derivative; shapes (..., 3)."""

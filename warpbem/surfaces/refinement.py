@@ -7,11 +7,11 @@ parameter square, mapped by its own biquadratic geometry, so the surface is unch
 repeatedly up to ``max_levels`` times. The ratio is scaled with the body's own mesh
 (``relative_element_size`` against the k = 4 sphere's): a mesh twice as fine is refined twice
 as finely near contact, so the gap is resolved as the body is and the error near contact falls
-with the mesh instead of stopping at a floor the ratio sets (issue 11: at h/a = 1.1 the normal
-drag stayed at -1.4 % from k = 8 on with a fixed ratio). The refined mesh has hanging nodes,
-which the collocation methods do not mind: the density is discontinuous between elements and
-only the element integrals, areas and collocation points enter. The seed had no such
-refinement; its near-contact motion was "rough" (thesis ch. 3.3).
+with the mesh instead of stopping at a floor a fixed ratio sets (``benchmarks/convergence.py``,
+README "Accuracy near contact"). The refined mesh has hanging nodes, which the collocation
+methods do not mind: the density is discontinuous between elements and only the element
+integrals, areas and collocation points enter. The seed had no such refinement; its
+near-contact motion was "rough" (thesis ch. 3.3).
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import numpy as np
 import scipy.spatial
 
 from . import quad9
+from .gaps import WALL
 
 # node (s, t) of each child's 9 nodes, for the four quarters of [-1, 1]^2
 _CHILD_PARAMS = np.array(
@@ -38,7 +39,7 @@ def split(element_nodes: np.ndarray) -> np.ndarray:
 
 
 def element_radius(element_nodes: np.ndarray) -> np.ndarray:
-    return np.linalg.norm(element_nodes - element_nodes[:, 8:9], axis=-1).max(axis=1)
+    return np.linalg.norm(element_nodes - element_nodes[:, quad9.CENTRE_NODE, None], axis=-1).max(axis=1)
 
 
 def relative_element_size(element_nodes: np.ndarray) -> float:
@@ -57,8 +58,6 @@ REFERENCE_ELEMENT_SIZE = 0.2755
 # (README stability map: on the k = 4 sphere, 0.0055 radius; the squeeze flow to the wall is 1.2 %
 # off at a gap of 0.005 radius, two spheres 0.85 % at 0.02 and more below)
 WARN_FRACTION = 0.02
-
-WALL = -1  # neighbour id of the wall in the contact lists
 
 
 def resolved_length(gap: np.ndarray, neighbour: np.ndarray, body_gap_share: float) -> np.ndarray:
@@ -92,7 +91,7 @@ def _gaps(meshes, p, wall, ratio, body_gap_share, spheres: BoundingSpheres):
     other body near enough to matter (from its centre to the body's nearest node), and the
     nearest neighbour (WALL or a body index)."""
     elements = meshes[p]
-    centres = elements[:, 8]
+    centres = elements[:, quad9.CENTRE_NODE]
     gap = np.full(len(elements), np.inf)
     neighbour = np.full(len(elements), WALL)
     if wall:
