@@ -144,7 +144,7 @@ def lateral_error(device, spacing, shifts):
 
     def mobility(shift):
         bodies = [Body(mesh, position=(0.0, 0.0, REST)), Body(mesh, position=(spacing + shift, 0.0, REST))]
-        flow = hydro.solver.solve(bodies)
+        flow = hydro.mobility.solve(bodies)
         grand = hydro._grand_mobility(bodies).quadratic()
         return grand, np.concatenate([flow.velocity.ravel(), flow.angular_velocity.ravel() * A])
 
@@ -182,7 +182,7 @@ def interaction_error(device, spacing, lattices, fine=0.5e-9):
         for name, offsets in (("opposite", (0.4, -0.4)), ("same", (0.4, 0.4))):
             bodies = [Body(mesh, position=(0.0, 0.0, base + offsets[0] * lattice)),
                       Body(mesh, position=(spacing, 0.0, base + offsets[1] * lattice))]
-            exact = motion(Motion.of(hydro.solver.solve(bodies)),
+            exact = motion(Motion.of(hydro.mobility.solve(bodies)),
                            hydro._grand_mobility(bodies))
             split = motion(*hydro._snapshot(bodies))
             coarse = motion(*hydro._kept(*hydro._snapped(bodies, lattice), lambda b: None))

@@ -259,7 +259,7 @@ def step_case(scene: str, overrides: list, steps: int, split: bool, device: str,
                 travel_um=float(np.linalg.norm(end - loaded.bodies[0].position)) * 1e6,
                 elements=int(sum(len(m.elements) for m in model.meshes)), split=split, setup_s=setup,
                 step_s=per_step, cpu_setup_s=cpu_setup, cpu_step_s=cpu_step, first_steps_s=marks[steps - 1] - setup,
-                near=int(len(sim.solver.near_bodies)) if split else int(model.fixed_mask.sum()), operator=sim.solver.operator,
+                near=int(len(sim.mobility.near_bodies)) if split else int(model.fixed_mask.sum()), operator=sim.mobility.operator_description,
                 peak_gb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6)
 
 

@@ -186,7 +186,7 @@ def test_a_run_with_the_split_steps_as_the_full_one_when_every_cell_is_near():
         for _ in range(2):
             state, frame = sim.step(state)
         ends[split] = (state.positions[0] - positions[0], frame.force[1:])
-    assert ("near-far" in sim.solver.operator_description)
+    assert ("near-far" in sim.mobility.operator_description)
     moved, held = ends["off"]
     np.testing.assert_allclose(ends["on"][0], moved, rtol=0, atol=1e-6 * np.abs(moved).max())
     np.testing.assert_allclose(ends["on"][1], held, rtol=0, atol=1e-6 * np.abs(held).max())

@@ -96,3 +96,12 @@ def test_body_refuses_an_open_or_inward_mesh():
         wb.Body(wb.mesh.Mesh(SPHERE.nodes, SPHERE.elements[:-1]))
     with pytest.raises(wb.MeshError, match="inwards"):
         wb.Body(wb.mesh.Mesh(SPHERE.nodes, SPHERE.elements[:, [0, 3, 2, 1, 7, 6, 5, 4, 8]]))
+
+
+def test_declared_density_orders_are_the_kernels():
+    """The option's range is the orders kernels/assembly.py generates, declared there once."""
+    from warpbem.kernels.assembly import DENSITY_ORDERS
+    from warpbem.options import declared
+
+    spec = next(spec for name, _, spec in declared(wb.SolverOptions) if name == "density_order")
+    assert tuple(range(int(spec.low), int(spec.high) + 1)) == DENSITY_ORDERS

@@ -60,8 +60,8 @@ def test_a_frame_is_solved_at_its_own_positions_at_no_extra_cost(scheme, solves_
     model, state = passing_cells(scheme)
     sim = Simulator(model)
     calls = []
-    solve = sim.solver.solve
-    sim.solver.solve = lambda *args, **kwargs: calls.append(1) or solve(*args, **kwargs)
+    solve = sim.mobility.solve
+    sim.mobility.solve = lambda *args, **kwargs: calls.append(1) or solve(*args, **kwargs)
     frames = [sim.frame(state)]
     for _ in range(3):
         state, frame = sim.step(state)
@@ -105,8 +105,8 @@ def test_gaps_are_searched_once_per_state_and_retries_cost_no_solve():
     sim.gaps = CountingFinder(sim.gaps)
     state = model.initial_state([[0.0, 0.0, 0.25e-6 - m.nodes[:, 2].min()]])
     calls = []
-    solve = sim.solver.solve
-    sim.solver.solve = lambda *args, **kwargs: calls.append(1) or solve(*args, **kwargs)
+    solve = sim.mobility.solve
+    sim.mobility.solve = lambda *args, **kwargs: calls.append(1) or solve(*args, **kwargs)
     for _ in range(3):
         state, frame = sim.step(state)
     assert sim.gaps.counts and max(sim.gaps.counts.values()) == 1
@@ -215,3 +215,21 @@ def test_rigid_scenes_build_no_traction_or_elastic_operator(monkeypatch):
     for _ in range(2):
         state, _ = sim.step(state)
     assert kinds and set(kinds) == {"double_layer"}
+
+
+def test_the_simulator_binds_device_state_to_its_own_copies():
+    """Per-device state (compiled kernels, assembled elastic operators) lives in the simulator's
+    copies of the interactions (Interaction.bound): the model's stay as configured, so one model
+    serves several simulators."""
+    from warpbem.elastic.deformable import Deformation
+
+    cell = wb.mesh.sphere(5e-6, 2)
+    flow = Flow(100.0, 1.2e-3, wall=False)
+    model = Model([cell], [False], flow, interactions=[Deformation([cell], [True], [4e3], [0.33], flow)])
+    first, second = Simulator(model), Simulator(model)
+    configured = model.interaction("deformation")
+    assert configured.elastic == {}  # nothing assembled into the model's object
+    assert all(0 in sim.interactions[0].elastic for sim in (first, second))
+    assert first.interactions[0] is not configured and first.interactions[0] is not second.interactions[0]
+    state = model.initial_state([[0.0, 0.0, 0.0]])
+    assert np.array_equal(first.step(state)[0].positions, second.step(state)[0].positions)

@@ -28,7 +28,7 @@ def motion(hydro, flow, grand):
 
 
 def exact(hydro, bodies):
-    return motion(hydro, Motion.of(hydro.solver.solve(bodies)), hydro._grand_mobility(bodies))
+    return motion(hydro, Motion.of(hydro.mobility.solve(bodies)), hydro._grand_mobility(bodies))
 
 
 def relative_change(a, b):

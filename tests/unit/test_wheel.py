@@ -4,6 +4,7 @@ install) into a fresh virtual environment outside the checkout, where ``import w
 would hide a subpackage missing from the wheel (``warpbem.elastic`` once was)."""
 
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -37,8 +38,12 @@ def _run(args, cwd, env, timeout=900):
 def test_wheel_installs_and_runs_outside_the_checkout(tmp_path):
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
     env["WARPBEM_CACHE"] = str(tmp_path / "kernel_cache")  # nothing compiled by the checkout is reused
+    # built from a copy: setuptools' build/ folder in the checkout would keep files since removed
+    source = tmp_path / "source"
+    shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(".git", ".venv", ".warp_cache", "build", "results",
+                                                                 "*.egg-info", "__pycache__"))
     wheels = tmp_path / "wheels"
-    _run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", wheels, ROOT], tmp_path, env)
+    _run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", wheels, source], tmp_path, env)
     (wheel,) = wheels.glob("warpbem-*.whl")
     venv = tmp_path / "venv"
     _run([sys.executable, "-m", "venv", venv], tmp_path, env)

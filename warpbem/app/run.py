@@ -94,12 +94,12 @@ def run(scene_path, output, overrides=(), device="cpu", resume=False, progress=p
             state, frame = sim.step(state, stop)
             steps += 1
             if steps == 1:  # decided at the first solve from the scene's size, kept for the run
-                attrs["operator"] = sim.solver.operator_description
+                attrs["operator"] = sim.mobility.operator_description
             if scene.frame_due(state, stop):
                 writer.append(**frame.columns())
                 elapsed = time.perf_counter() - start
                 rate = (state.time - t0) / elapsed
                 eta = (scene.end - state.time) / rate if rate > 0 else float("inf")
                 progress(f"t = {state.time:.6g} / {scene.end:g} s  steps {state.steps}  {steps / elapsed:.2f} steps/s"
-                         f"  dt {frame.dt:.2e} s  GMRES {frame.gmres_iterations} ({sim.solver.operator_description})  ETA {eta:.0f} s")
+                         f"  dt {frame.dt:.2e} s  GMRES {frame.gmres_iterations} ({sim.mobility.operator_description})  ETA {eta:.0f} s")
     return state

@@ -112,9 +112,9 @@ def is_spherical(mesh, rtol: float = 1e-9) -> bool:
 class HydrodynamicSolves:
     """The mobility solves of a model's states, exact or from snapshots (module docstring)."""
 
-    def __init__(self, model, solver):
+    def __init__(self, model, mobility):
         self.model = model
-        self.solver = solver
+        self.mobility = mobility
         self.tolerance = model.solver.reuse_tolerance
         self.lateral = model.solver.reuse_lateral or 50.0 * self.tolerance
         self.interaction = model.solver.reuse_interaction or 10.0 * self.tolerance
@@ -139,7 +139,7 @@ class HydrodynamicSolves:
             motion = Motion(flow.velocity + u, flow.angular_velocity + w, flow.force + f, flow.torque + t,
                             flow.iterations, flow.residual)
             return motion, snapshot
-        return Motion.of(self.solver.solve(bodies, forces=loads.force, torques=loads.torque,
+        return Motion.of(self.mobility.solve(bodies, forces=loads.force, torques=loads.torque,
                                            check_placement_first=False)), None
 
     def basis(self, bodies, coordinates, snapshot) -> tuple[Responses, str]:
@@ -157,7 +157,7 @@ class HydrodynamicSolves:
         return np.concatenate([force[self.free], torque[self.free] / radii], axis=1).ravel()
 
     def _responses(self, bodies, load_force, load_torque) -> Responses:
-        solves = [self.solver.solve(bodies, forces=PROBE_FORCE * f, torques=PROBE_FORCE * t,
+        solves = [self.mobility.solve(bodies, forces=PROBE_FORCE * f, torques=PROBE_FORCE * t,
                                     check_placement_first=False, background=False)
                   for f, t in zip(load_force, load_torque)]
         stack = [np.array([getattr(s, name) for s in solves]) / PROBE_FORCE
@@ -224,7 +224,7 @@ class HydrodynamicSolves:
 
     def _solved(self, bodies, radii=None):
         """A snapshot solved at ``bodies``: (flow Motion, grand mobility Responses)."""
-        return Motion.of(self.solver.solve(bodies, check_placement_first=False)), self._grand_mobility(bodies, radii)
+        return Motion.of(self.mobility.solve(bodies, check_placement_first=False)), self._grand_mobility(bodies, radii)
 
     def _kept(self, key, snapped, solve):
         if key in self._snapshots:

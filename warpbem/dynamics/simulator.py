@@ -131,12 +131,13 @@ class Simulator:
     def __init__(self, model: Model, device="cpu"):
         self.model = model
         fixed_cells = int(model.fixed_mask.sum())
-        self.solver = build_solver(model.solver, model.flow, device, fixed_cells)
+        self.mobility = build_solver(model.solver, model.flow, device, fixed_cells)
         self.near_far_split = model.solver.near_far_report(fixed_cells)  # on or off, and why
-        self.hydro = HydrodynamicSolves(model, self.solver)
+        self.hydro = HydrodynamicSolves(model, self.mobility)
         self.gaps = GapFinder(device)
-        for x in model.interactions:
-            x.prepare(device)
+        # the interactions with their device data, bound here: the model's own stay untouched
+        self.interactions = tuple(x.bound(device) for x in model.interactions)
+        self.implicit = tuple(x for x in self.interactions if x.implicit)
         self._latest: Evaluation | None = None
 
     def evaluate(self, state: State, dt_plan: float | None = None, geometry=None) -> Evaluation:
@@ -149,13 +150,13 @@ class Simulator:
         bodies, contacts = self.geometry(state) if geometry is None else geometry
         if dt_plan is None:
             dt_plan = model.policy.dt(contacts.smallest(model.policy.contact_gap))
-            limits = [x.longest_step(bodies, contacts, state.parts.get(x.name)) for x in model.interactions]
+            limits = [x.longest_step(bodies, contacts, state.parts.get(x.name)) for x in self.interactions]
             dt_plan = max(model.policy.dt_min, min([dt_plan] + limits))
-        explicit = {x.name: loads for x in model.interactions
+        explicit = {x.name: loads for x in self.interactions
                     if (loads := x.explicit_loads(bodies, contacts)) is not None}
         total = sum(explicit.values(), Loads.zero(model.n_bodies))
-        stiff = (any(x.reuses_mobility(state.parts[x.name]) for x in model.interactions if x.name in state.parts)
-                 and all(x.keeps_shape(state.parts[x.name], self.hydro.tolerance) for x in model.interactions
+        stiff = (any(x.reuses_mobility(state.parts[x.name]) for x in self.interactions if x.name in state.parts)
+                 and all(x.keeps_shape(state.parts[x.name], self.hydro.tolerance) for x in self.interactions
                          if x.shapes_bodies and x.name in state.parts))
         background, snapshot = self.hydro.background(bodies, total, stiff)
         hydro, implicit = self._implicit(state, bodies, contacts, background, snapshot, dt_plan)
@@ -173,7 +174,7 @@ class Simulator:
         """The implicit interactions' coordinates at this state, joined, with the solves of the
         basis their forces are combined from and the backward-Euler system of a step."""
         found = []
-        for x in self.model.implicit:
+        for x in self.implicit:
             c = x.implicit_coordinates(bodies, contacts, state.parts.get(x.name), background.velocity,
                                        background.angular_velocity, dt_plan)
             if c is not None and len(c.values):
@@ -232,7 +233,7 @@ class Simulator:
 
         moved, _ = integrate.step(state, motion, dt, self.model.scheme)
         moved = replace(moved, time=moved.time if landing is None else landing, steps=state.steps + 1)
-        owners = [x for x in self.model.interactions if x.name in state.parts]
+        owners = [x for x in self.interactions if x.name in state.parts]
         shapers = [x for x in owners if x.shapes_bodies]
         if shapers:  # shapes first (the end's bodies are built with them), from the start state
             loads, contact_loads = start.step_loads(dt)

@@ -166,6 +166,7 @@ class Deformation(Interaction):
 
     def prepare(self, device) -> None:
         self.device = device
+        self._warned = set()  # each simulator's copy warns once per body and kind (Interaction.bound)
         # assembled once per cell, in its body frame (they depend on the reference shape only)
         self.elastic = {i: InteriorElasticity(self.meshes[i], self.shear_modulus[i], self.poisson_ratio[i], device,
                                               options=self.solver)

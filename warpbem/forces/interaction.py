@@ -37,6 +37,7 @@ them where they act.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -182,6 +183,14 @@ class Interaction:
 
     def prepare(self, device) -> None:
         """Put device data (kernels, static arrays) on ``device`` before the first step."""
+
+    def bound(self, device) -> "Interaction":
+        """A copy of this interaction with its device data on ``device`` (``prepare``): the
+        simulator steps with it, so the model's interactions stay as configured and one model
+        can serve several simulators and devices."""
+        other = copy.copy(self)
+        other.prepare(device)
+        return other
 
     def derived_columns(self) -> dict:
         """{column name: (unit, per-frame shape, description)} computed from ``part``."""

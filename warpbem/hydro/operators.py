@@ -1,4 +1,6 @@
-"""The double-layer operator of the Completed Double Layer method, (1/2 + D) q.
+"""The boundary-integral operators of the solves, one class for every kernel kind: the double
+layer of the Completed Double Layer method, (1/2 + D) q (below), its adjoint, the single layers
+and the elastic double layer's parts.
 
 For a density q constant on each element and collocation at the element centres xi_a,
 
@@ -43,6 +45,7 @@ import numpy as np
 
 from .. import runtime
 from .geometry import SurfaceGeometry, basis_at_gauss_points
+from .options import OPERATOR_MODES
 from .treecode import FarField, TreecodeOptions
 
 
@@ -75,8 +78,6 @@ class QuadratureOptions:
             raise ValueError(f"max_level must be an integer in [0, 24], got {self.max_level!r}")
 
 
-OPERATOR_MODES = ("auto", "dense", "matrix_free", "treecode")
-DENSITY_ORDERS = (1, 2, 3)  # collocation points per direction on an element (kernels/assembly.py)
 SINGLE_LAYERS = ("single_layer", "inverse_distance")
 # kinds whose self block follows from the rigid-translation identity of their own row sums
 IDENTITY_KINDS = ("double_layer", "elastic_rotation", "elastic_dyadic")
@@ -157,7 +158,7 @@ class DoubleLayerOperator:
         return self.geometry.unchanged_bodies(previous.geometry)
 
     def assemble(self):
-        """The dense matrix of 1/2 + D (Warp array on the operator's device)."""
+        """The dense matrix of this operator, self blocks included (Warp array on its device)."""
         if self._matrix is not None:
             return self._matrix
         wp = self._wp
@@ -271,7 +272,7 @@ class DoubleLayerOperator:
         return previous._buffer[: size**2].reshape((size, size))
 
     def diagonal_blocks(self, bodies) -> dict:
-        """{p: the (3 E_p, 3 E_p) host float64 block of 1/2 + D for body p's own elements}: cut
+        """{p: the (3 E_p, 3 E_p) host float64 block of this operator for body p's own elements}: cut
         from the assembled matrix (one copy off a GPU), or, matrix-free, assembled for each body
         alone (its block fits where the whole matrix does not)."""
         bodies = list(bodies)
@@ -334,7 +335,8 @@ class DoubleLayerOperator:
         return self._diagonal
 
     def matvec(self, density: np.ndarray, pole_forces: np.ndarray | None = None) -> np.ndarray:
-        """(1/2 + D) q for a host vector q of length 3 E; returns a float64 host vector. With the
+        """This operator applied to a host vector q of length 3 E (for the double layer (1/2 + D) q);
+        returns a float64 host vector. With the
         treecode, ``pole_forces`` (one force per ``point_sources`` pole, scaled, viscosity 1) adds
         their Stokeslets in the same sum."""
         wp = self._wp

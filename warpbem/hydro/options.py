@@ -35,11 +35,12 @@ DEFAULT_TOLERANCE = {"float64": 1e-8, "float32": 1e-6}
 # 3.5e-4, 20 um: 2e-3)
 DEFAULT_CUTOFF = 40e-6
 NEAR_FAR_SPLITS = ("auto", "on", "off")
-# fixed cells from which "auto" switches the near-far split on: from 4 x 4 domes the split's step
-# was never dearer than the full solve's in three runs, from 5 x 5 35-40 % cheaper; below it cost
-# as much or up to 30 % more (1 x 1) and adds its approximation for nothing (benchmarks/frozen.py
-# steps --counts 1 2 3 4 5 --full, docs/figures/frozen_steps_notes.md)
-NEAR_FAR_FIXED_CELLS = 16
+# fixed cells from which "auto" switches the near-far split on: per step on the crossing path
+# (benchmarks/frozen.py steps --counts 1 2 3 4 5 --full; docs/figures/frozen_steps_notes.md) the
+# split cost as much as the full solve up to 4 x 4 domes (2.11 against 2.12 s at 16) and 35-40 %
+# less from 5 x 5 (2.26 against 3.40 s) in each of three runs; below, it would add its error
+# (1e-4 at the 40 um cut-off) for no gain
+NEAR_FAR_FIXED_CELLS = 25
 # the density order of a solve, and of a time-stepped model (SolverOptions.density_order)
 SOLVE_DENSITY_ORDER = 2
 TIME_STEPPING_DENSITY_ORDER = 1
