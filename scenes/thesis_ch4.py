@@ -160,8 +160,8 @@ def tethered_profile_chart(path: Path) -> Path | None:
         patch = hertz.contact_radius(force, radius, hertz.compliance(modulus, nu))
         # as the rigid-with-Hertz model places it (kernels/bonds.py): the flat on the plane of the
         # closest point, the rest brought down by up to the approach delta = a_s^2 / R
-        ax.plot(rho * 1e6, (bottom + hertz.surface_height(rho, patch, radius)) * 1e9, "--", color=line.get_color(), lw=1,
-                label=f"{label}: Hertz surface, a_s = {patch * 1e6:.2g} um (eq. 4.9)")
+        ax.plot(rho * 1e6, (bottom + hertz.surface_height(rho, patch, radius)) * 1e9, "--", color=line.get_color(),
+                lw=1, label=f"{label}: Hertz surface, a_s = {patch * 1e6:.2g} um (eq. 4.9)")
     ax.plot(rho * 1e6, (bottom + rho**2 / (2 * radius)) * 1e9, ":", color="0.4", lw=1, label="undeformed sphere (last run)")
     ax.set(xlabel="x - X [um] (flow direction)", ylabel="height above the wall [nm]", ylim=(0, 1000),
            title="fig. 4.3: the tethered compliant cell's contact (stiff bonds)")

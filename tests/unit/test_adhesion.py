@@ -85,7 +85,8 @@ def test_patch_lowering_is_johnsons_hertz_surface():
     got = out.numpy()
     np.testing.assert_allclose(got[:3], -rho[:3] ** 2 / (2 * radius), rtol=1e-12)
     # the host form (hertz.surface_height, the charts') is the sphere lowered by the same profile
-    np.testing.assert_allclose(hertz.surface_height(rho, a, radius), rho**2 / (2 * radius) + got, rtol=1e-12, atol=1e-20)
+    np.testing.assert_allclose(hertz.surface_height(rho, a, radius), rho**2 / (2 * radius) + got,
+                               rtol=1e-12, atol=1e-20)
     # u(rho) of the Hertz pressure by quadrature: u = (1 / (pi E*)) int p(r') dA' / |x - x'|,
     # with E* from p0 = 2 E* a / (pi R) (Johnson eq. 4.23): u = 2 a / (pi^2 R) int sqrt(1 - r^2/a^2) / |x - x'| dA'
     r, w = np.polynomial.legendre.leggauss(200)

@@ -217,7 +217,8 @@ class Deformation(Interaction):
             return velocities
         out = list(velocities)
         for i in np.flatnonzero(self.deformable):
-            out[i] = part["node_velocity"][i, self.meshes[i].elements[:, quad9.CENTRE_NODE]]  # at the collocation points
+            # at the collocation points
+            out[i] = part["node_velocity"][i, self.meshes[i].elements[:, quad9.CENTRE_NODE]]
         return out
 
     def advance_shape(self, part, start_bodies, start_loads, end_orientations, dt, point_loads):

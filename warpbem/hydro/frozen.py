@@ -90,8 +90,9 @@ class BackgroundField:
         if geo.n_elements < tree_elements:
             return
         n_qp = geo.qp_positions.shape[1]
-        self.far = FarField(self.operator.kernels, self.operator.device, geo.element_nodes[:, CENTRE_NODE], geo.collocation,
-                            np.arange(geo.n_points) // geo.points_per_element, geo.qp_positions.reshape(-1, 3),
+        self.far = FarField(self.operator.kernels, self.operator.device, geo.element_nodes[:, CENTRE_NODE],
+                            geo.collocation, np.arange(geo.n_points) // geo.points_per_element,
+                            geo.qp_positions.reshape(-1, 3),
                             np.repeat(np.arange(geo.n_elements), n_qp), poles, treecode,
                             cover=np.asarray(cover, dtype=float) / self.length)
         self.values = self.far.local_values(quadrature_strengths(geo, self.density), self.pole_forces)
