@@ -53,7 +53,7 @@ import scipy.sparse.linalg as spla
 
 from ..surfaces.body import Body
 from ..surfaces.placement import check_placement
-from ..surfaces.refinement import WALL
+from ..surfaces.gaps import WALL
 from .deflated import RigidModes, deflated_operator, deflated_solve
 from .geometry import SurfaceGeometry
 from .operators import DoubleLayerOperator, QuadratureOptions, choose_operator, dof_indices
