@@ -148,7 +148,7 @@ def test_an_update_interval_solves_the_target_every_mth_step_and_relaxes_in_betw
     for interval in (1, 3):
         _, model, sim = cell_in_shear(2, 0.2, 1e-4, update_interval=interval)
         calls = []
-        deformation = model.interactions[0]
+        deformation = sim.interactions[0]  # the copy the simulator steps with (Interaction.bound)
         solve = deformation._target
         deformation._target = lambda *a: calls.append(1) or solve(*a)
         state = model.initial_state([[0.0, 0.0, 0.0]])
