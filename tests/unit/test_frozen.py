@@ -11,6 +11,7 @@ import pytest
 import warpbem as wb
 from warpbem.hydro.frozen import FrozenArraySolver
 from warpbem.hydro.treecode import TreecodeOptions
+from warpbem.surfaces.quad9 import CENTRE_NODE
 
 SHEAR, VISCOSITY = 1.0, 1.0
 
@@ -137,7 +138,7 @@ def test_background_flow_vanishes_on_the_adherent_cells(background_8x8):
     and an inner one)."""
     bodies, field = background_8x8
     for cell in (bodies[0], bodies[27]):
-        centres = cell.world_nodes()[cell.mesh.elements][:, 8]
+        centres = cell.world_nodes()[cell.mesh.elements][:, CENTRE_NODE]
         normals = (centres - cell.position) / np.linalg.norm(centres - cell.position, axis=1)[:, None]
         near, farther = (field.velocity(centres + d * normals) for d in (0.01, 0.02))
         assert np.abs(farther).max() > 0.04  # the flow about the cell is not zero,

@@ -5,6 +5,7 @@ import pytest
 
 import warpbem as wb
 from warpbem import mesh
+from warpbem.surfaces.quad9 import CENTRE_NODE
 
 
 def test_seed_sphere_has_96_elements_and_is_closed():
@@ -96,7 +97,7 @@ def test_a_pole_graded_sphere_crowds_its_elements_at_the_south_pole_and_stays_a_
     np.testing.assert_allclose(np.linalg.norm(graded.nodes, axis=1), 1.0, rtol=1e-12)
     graded.check()
     assert graded.area() == pytest.approx(4 * np.pi, rel=2e-3)
-    centres, areas = graded.element_nodes()[:, 8], graded.element_areas()
+    centres, areas = graded.element_nodes()[:, CENTRE_NODE], graded.element_areas()
     south, north = areas[np.argmin(centres[:, 2])], areas[np.argmax(centres[:, 2])]
     assert 4.0**2 < north / south < 4.0**4  # the pole elements: 1/g and g times the uniform size
     assert areas[np.argmin(centres[:, 2])] == pytest.approx(

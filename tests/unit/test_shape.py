@@ -5,6 +5,7 @@ import pytest
 
 import warpbem as wb
 from warpbem.elastic.shape import deformed, nodal_displacement, shear_plane_deformation
+from warpbem.surfaces.quad9 import CENTRE_NODE
 
 A = 5e-6
 
@@ -25,9 +26,9 @@ def test_nodes_take_a_linear_displacement_exactly(k):
     ring), corner, edge and centre nodes alike; the deformed mesh moves by it."""
     mesh = wb.mesh.sphere(A, k)
     eps = np.array([[1e-3, 0.0, 2e-3], [0.0, -1e-3, 0.0], [2e-3, 0.0, 5e-4]])
-    u = nodal_displacement(mesh, mesh.element_nodes()[:, 8] @ eps.T)
+    u = nodal_displacement(mesh, mesh.element_nodes()[:, CENTRE_NODE] @ eps.T)
     np.testing.assert_allclose(u, mesh.nodes @ eps.T, rtol=0, atol=1e-12 * A)
-    moved = deformed(mesh, mesh.element_nodes()[:, 8] @ eps.T)
+    moved = deformed(mesh, mesh.element_nodes()[:, CENTRE_NODE] @ eps.T)
     np.testing.assert_allclose(moved.nodes, mesh.nodes @ (np.eye(3) + eps).T, rtol=0, atol=1e-12 * A)
     with pytest.raises(ValueError, match="element_displacement must have shape"):
         nodal_displacement(mesh, np.zeros((3, 3)))
@@ -40,7 +41,7 @@ def test_a_concentrated_load_is_balanced_by_a_smooth_traction_and_a_balanced_one
     from warpbem.elastic.deformable import balanced
 
     mesh = wb.mesh.sphere(5e-6, 4)
-    centres, areas = mesh.element_nodes()[:, 8], mesh.element_areas()
+    centres, areas = mesh.element_nodes()[:, CENTRE_NODE], mesh.element_areas()
     load = np.zeros((mesh.n_elements, 3))
     bottom = np.argmin(centres[:, 2])
     load[bottom] = np.array([1e-12, 0.0, 3e-10]) / areas[bottom]  # 0.3 nN up, 1 pN along x, off-centre

@@ -21,6 +21,7 @@ import warpbem as wb
 from warpbem.elastic.interior import ElasticInputError, InteriorElasticity
 from warpbem.elastic.shape import deformed, shear_plane_deformation
 from warpbem.surfaces.body import Body
+from warpbem.surfaces.quad9 import CENTRE_NODE
 
 A, G, NU = 5e-6, 1e3, 0.33
 E = 2 * G * (1 + NU)
@@ -43,7 +44,7 @@ def hertz_flattening(mesh, patch_radius):
     = 0.33, R = 5 um) under the Hertz pressure of radius ``patch_radius`` at the south pole."""
     radius, estar = 5e-6, 2e3 * 1.33 / (1 - 0.33**2)
     force = 4 * estar * patch_radius**3 / (3 * radius)
-    centres, areas = mesh.element_nodes()[:, 8], mesh.element_areas()
+    centres, areas = mesh.element_nodes()[:, CENTRE_NODE], mesh.element_areas()
     rho = np.hypot(centres[:, 0], centres[:, 1])
     lower = centres[:, 2] < 0
     pressure = np.where(lower, np.sqrt(np.clip(1 - rho**2 / patch_radius**2, 0, None)), 0.0)

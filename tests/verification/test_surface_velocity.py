@@ -16,6 +16,7 @@ import pytest
 
 import warpbem as wb
 from warpbem.surfaces.body import Body
+from warpbem.surfaces.quad9 import CENTRE_NODE
 
 A, C, H, SHEAR = 5e-6, 2.5e-6, 7.5e-6, 100.0
 
@@ -33,7 +34,7 @@ def test_a_surface_moving_with_the_shear_flow_leaves_it_undisturbed(wall, height
     I_zz / (I_xx + I_zz) (-0.82 % measured; -0.20 % at k = 8: the element-constant slip and
     collocation moments, second order), where the rigid spheroid turns 20 % slower."""
     mesh = wb.mesh.spheroid(A, C / A, 4)
-    centres = mesh.nodes[mesh.elements[:, 8]] + [0.0, 0.0, height]  # the collocation points
+    centres = mesh.nodes[mesh.elements[:, CENTRE_NODE]] + [0.0, 0.0, height]  # the collocation points
     slip = np.zeros_like(centres)
     slip[:, 0] = SHEAR * centres[:, 2]
     moving = wb.solve_mobility([Body(mesh, position=(0, 0, height), surface_velocity=slip)], SHEAR, 1e-3,
@@ -51,7 +52,7 @@ def test_only_the_non_rigid_part_of_a_surface_velocity_counts():
     which for a rotation is not rigid); a surface velocity of the wrong shape or on a fixed
     body is refused by name."""
     mesh = wb.mesh.sphere(A, 2)
-    centres = mesh.nodes[mesh.elements[:, 8]]
+    centres = mesh.nodes[mesh.elements[:, CENTRE_NODE]]
     rigid_field = np.array([1e-6, 2e-6, -1e-6]) + np.cross([0.0, 3.0, 1.0], centres)
     base = wb.solve_mobility([Body(mesh, position=(0, 0, 3 * A))], SHEAR, 1e-3, options=wb.SolverOptions(density_order=1))
     moved = wb.solve_mobility([Body(mesh, position=(0, 0, 3 * A), surface_velocity=rigid_field)], SHEAR, 1e-3,

@@ -417,7 +417,7 @@ class MobilitySolver:
             if self.mode is None:  # "auto": decided once, for this solve and every later one
                 self.mode = choose_operator(3 * geometry.n_points, options.dtype, self.device)
             double_layer = DoubleLayerOperator(geometry, flow.wall, self.quadrature, options.dtype, self.device,
-                                               self.mode, reuse=previous.double_layer if previous else None,
+                                               self.mode, previous=previous.double_layer if previous else None,
                                                treecode=options.treecode, point_sources=all_completion_poles(geometry))
             system = CompletedDoubleLayer(geometry, double_layer, fixed, previous)
 

@@ -116,7 +116,7 @@ class DoubleLayerOperator:
     the elements of ``geometry``, dense or matrix-free, with its self blocks (module docstring)."""
 
     def __init__(self, geometry: SurfaceGeometry, wall: bool, quadrature: QuadratureOptions,
-                 dtype: str = "float64", device="cpu", mode: str = "auto", reuse: "DoubleLayerOperator | None" = None,
+                 dtype: str = "float64", device="cpu", mode: str = "auto", previous: "DoubleLayerOperator | None" = None,
                  kind: str = "double_layer", treecode: TreecodeOptions | None = None,
                  point_sources: np.ndarray | None = None):
         if mode not in OPERATOR_MODES:
@@ -145,8 +145,8 @@ class DoubleLayerOperator:
         self._matrix = None
         self._buffer = None  # the memory behind _matrix (it may be larger: DENSE_HEADROOM)
         self._diagonal = None
-        self.reused_bodies = self._bodies_unchanged_since(reuse)
-        self._previous = reuse if self.reused_bodies.any() else None
+        self.reused_bodies = self._bodies_unchanged_since(previous)
+        self._previous = previous if self.reused_bodies.any() else None
 
     def _bodies_unchanged_since(self, previous) -> np.ndarray:
         """Bodies whose blocks can be copied from ``previous`` instead of assembled: same
