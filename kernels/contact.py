@@ -8,8 +8,8 @@ clipping to the parameter squares; against the wall f = z_a(s, t)^2 / 2, and aga
 quadratically, so the gap is exact to round-off and varies smoothly as bodies move: the
 electrostatic repulsion (thesis eq. 3.1) changes e-fold over 1/tau = 0.5 nm and cannot use a
 sampled gap (sampling errors near contact are tens of nanometres for 96-element cells).
-Alternating projections were tried first and converge at the rate (a/(a + gap))^2 per sweep,
-too slowly near contact.
+Newton rather than alternating projections, which converge at the rate (a/(a + gap))^2 per
+sweep, too slowly near contact.
 """
 
 import functools
