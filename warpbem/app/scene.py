@@ -221,8 +221,8 @@ def _mesh(where, spec, folder: Path):
         raise SceneError(f"{where}.path: {err}") from err
 
 
-TIME_KEYS = ("end", "dt_max", "dt_min", "contact_gap", "scheme", "frame_every", "frame_interval")
-POLICY_KEYS = ("dt_max", "dt_min", "contact_gap")
+POLICY_KEYS = {name for name, _, _ in declared(StepPolicy)}
+TIME_KEYS = POLICY_KEYS | {name for name, _, _ in declared(RunSettings)}  # the [time] table
 
 
 def parse(table: dict, folder: Path = Path(".")) -> Scene:

@@ -58,11 +58,6 @@ class RigidModes:
         rows = self.ranges[body]
         return self.modes[body].T @ (self.weights[rows] * x[rows])
 
-    def of_raw(self, body: int, raw: np.ndarray) -> np.ndarray:
-        """Coefficients in the orthonormal modes of the raw rigid field with coefficients
-        ``raw`` (U, Omega): L^T raw."""
-        return self.cholesky[body].T @ raw
-
     def to_raw(self, body: int, coefficients: np.ndarray) -> np.ndarray:
         """The raw coefficients (U, Omega) of the rigid field sum_l c_l phi_l: L^-T c."""
         return scipy.linalg.solve_triangular(self.cholesky[body].T, coefficients, lower=False)
