@@ -1,6 +1,6 @@
 """Row splitting across CPU threads: assembly and matrix-free apply with 1 thread, with all
 cores and one row block per thread (the split before issue 8), and with all cores and
-``runtime.CHUNKS_PER_THREAD`` blocks per thread taken as threads come free (the split now).
+``launch.CHUNKS_PER_THREAD`` blocks per thread taken as threads come free (the split now).
 
 A Warp CPU launch runs on one core; warpbem launches row blocks from a thread pool. Two cases:
 twelve spheres far apart (rows of equal cost), one sphere 0.05 radius above the wall with the
@@ -17,6 +17,7 @@ import numpy as np
 
 from common import best_time, print_table, write_csv
 from warpbem import Body, mesh, runtime
+from warpbem.kernels import launch
 from warpbem.hydro.geometry import SurfaceGeometry
 from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions
 
@@ -37,7 +38,7 @@ def main():
     parser.add_argument("--subdivisions", type=int, default=4)
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
-    all_cores, chunks = runtime.cpu_threads(), runtime.CHUNKS_PER_THREAD
+    all_cores, chunks = launch.cpu_threads(), launch.CHUNKS_PER_THREAD
     splits = {"1 thread": (1, 1), f"{all_cores} threads, 1 block each": (all_cores, 1),
               f"{all_cores} threads, {chunks} blocks each": (all_cores, chunks)}
     rows = []
@@ -45,8 +46,8 @@ def main():
         q = np.random.default_rng(0).standard_normal(3 * geometry.n_elements)
         times = {}
         for split, (threads, per_thread) in splits.items():
-            runtime.cpu_threads = lambda n=threads: n  # noqa: E731  (benchmark-only override)
-            runtime.CHUNKS_PER_THREAD = per_thread
+            launch.cpu_threads = lambda n=threads: n  # noqa: E731  (benchmark-only override)
+            launch.CHUNKS_PER_THREAD = per_thread
 
             def assemble():
                 DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="dense").assemble()

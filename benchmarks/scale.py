@@ -32,6 +32,7 @@ from warpbem import Body, ContactResolutionWarning, MobilitySolver, mesh, runtim
 from warpbem.hydro.geometry import SurfaceGeometry
 from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions
 from warpbem.hydro.treecode import TreecodeOptions
+from warpbem.kernels import launch
 from warpbem.hydro.options import SolverOptions
 
 
@@ -63,7 +64,7 @@ def direct_rows(operator: DoubleLayerOperator, q: np.ndarray, points: np.ndarray
     block = wp.empty((3 * len(points), 3 * geo.n_points), dtype=operator.kernels.green.dtype, device=device)
     rows = wp.array(points.astype(np.int32), dtype=int, device=device)
     cols = wp.array(np.arange(geo.n_elements, dtype=np.int32), dtype=int, device=device)
-    runtime.launch_rows(operator.kernels.assemble_entries, len(points),
+    launch.launch_rows(operator.kernels.assemble_entries, len(points),
                         lambda start, stop: [start, operator.surface, rows, cols, 1, block], device,
                         extra_dim=geo.n_elements)
     own = np.einsum("aij,aj->ai", operator._self_blocks().numpy()[points], q.reshape(-1, 3)[points]).ravel()

@@ -10,7 +10,7 @@ reference point, ``receptor_body``); the receptors of adhesive body c are
 whose surface carries the ligand, ``bond_birth``: time of formation). One thread
 per cell sums its own rows in row order, so the reductions are deterministic on CPU and CUDA
 alike (no float atomics). Every kernel takes the index of its first thread (``first``), so
-the host can split a long launch over CPU threads (``runtime.launch_rows``); no two threads
+the host can split a long launch over CPU threads (``launch.launch_rows``); no two threads
 write the same entry.
 
 Hertz patch (thesis ch. 4.2, eq. 4.9). The cells are rigid in the mobility problem; their

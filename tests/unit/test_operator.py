@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from warpbem import Body, mesh, runtime
+from warpbem.kernels import launch
 from warpbem.hydro.geometry import SurfaceGeometry
 from warpbem.hydro.mobility import CompletedDoubleLayer
 from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions, choose_operator
@@ -48,7 +49,7 @@ def test_cpu_row_split_is_deterministic(monkeypatch, rng):
     q = rng.standard_normal(make_operator(two_spheres_near_wall(), True).size)
     results = []
     for threads in (1, 2, 3):
-        monkeypatch.setattr(runtime, "cpu_threads", lambda: threads)
+        monkeypatch.setattr(launch, "cpu_threads", lambda: threads)
         results.append(make_operator(two_spheres_near_wall(), True, "matrix_free").matvec(q))
         results.append(make_operator(two_spheres_near_wall(), True, "dense").matvec(q))
     # matrix-free: every row is summed by one thread in the same order, however rows are split

@@ -47,6 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import runtime
+from ..kernels.launch import launch_rows
 from ..options import OptionError, declared, option, validate
 from ..surfaces import quad9
 from ..surfaces.gaps import WALL, bounding_spheres
@@ -264,7 +265,7 @@ class Adhesion(Interaction):
         """Launch over n threads (the kernels' ``first`` offset prepended); on the CPU a long
         launch is split over the thread pool, a short one is not worth the threads."""
         if self.device.is_cpu and n >= SPLIT_THREADS:
-            runtime.launch_rows(kernel, n, lambda start, stop: [start, *arguments], self.device)
+            launch_rows(kernel, n, lambda start, stop: [start, *arguments], self.device)
         elif n:
             self.wp.launch(kernel, dim=n, inputs=[0, *arguments], device=self.device)
 

@@ -44,6 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import runtime
+from ..kernels.launch import launch_rows
 from .geometry import SurfaceGeometry, basis_at_gauss_points
 from .options import OPERATOR_MODES
 from .treecode import FarField, TreecodeOptions
@@ -195,7 +196,7 @@ class DoubleLayerOperator:
             src = indices(self._previous.geometry.points_of(kept))
             dst = indices(kept_rows)
             old = self._previous.assemble()
-            runtime.launch_rows(self.kernels.gather_entries, len(kept_rows),
+            launch_rows(self.kernels.gather_entries, len(kept_rows),
                                 lambda start, stop: [start, old, src, src, matrix, dst, dst],
                                 self.device, extra_dim=len(kept_rows))
             del old
@@ -204,7 +205,7 @@ class DoubleLayerOperator:
         for rows, cols in ((moved_rows, np.arange(self.geometry.n_elements)), (kept_rows, self.geometry.elements_of(moved))):
             if len(rows) and len(cols):
                 r, c = indices(rows), indices(cols)
-                runtime.launch_rows(self.kernels.assemble_entries, len(rows),
+                launch_rows(self.kernels.assemble_entries, len(rows),
                                     lambda start, stop: [start, self.surface, r, c, 0, matrix],
                                     self.device, extra_dim=len(cols))
         if self.device.is_cpu:
@@ -243,11 +244,11 @@ class DoubleLayerOperator:
         wp = self._wp
         listed = wp.array(points.astype(np.int32), dtype=int, device=self.device)
         if self.kind in IDENTITY_KINDS:
-            runtime.launch_rows(self.kernels.identity_self_blocks, len(points),
+            launch_rows(self.kernels.identity_self_blocks, len(points),
                                 lambda start, stop: [start, self.surface, listed, matrix], self.device)
         else:
             blocks = self._self_blocks()
-            runtime.launch_rows(self.kernels.write_self_blocks, len(points),
+            launch_rows(self.kernels.write_self_blocks, len(points),
                                 lambda start, stop: [start, listed, blocks, matrix], self.device)
 
     def _moved_kept_block(self, previous, kept):
@@ -329,7 +330,7 @@ class DoubleLayerOperator:
             singular = self.kind in SINGLE_LAYERS
             own = self.kernels if self.kind in IDENTITY_KINDS else self.self_block_kernels
             kernel = self.kernels.self_blocks if singular else own.same_body_row_sums
-            runtime.launch_rows(kernel, n, lambda start, stop: [start, self.surface, blocks[start:stop]], self.device)
+            launch_rows(kernel, n, lambda start, stop: [start, self.surface, blocks[start:stop]], self.device)
             self._diagonal = wp.array(blocks.numpy() * (1.0 if singular else -1.0), dtype=self.kernels.green.mat33,
                                       device=self.device)
         return self._diagonal
@@ -387,7 +388,7 @@ class DoubleLayerOperator:
         vec3 = self.kernels.green.vec3
         q = wp.array(density.reshape(n, 3), dtype=vec3, device=self.device)
         out = wp.zeros(n, dtype=vec3, device=self.device)
-        runtime.launch_rows(
+        launch_rows(
             self.kernels.apply_matrix_free, n,
             lambda start, stop: [start, self.surface, diagonal, q, group, starts, items, out[start:stop]],
             self.device,
@@ -429,7 +430,7 @@ class DoubleLayerOperator:
                 block = wp.empty((3 * len(rows), 3 * m * len(cols)), dtype=self.kernels.green.dtype, device=self.device)
                 r = wp.array(rows.astype(np.int32), dtype=int, device=self.device)
                 c = wp.array(cols.astype(np.int32), dtype=int, device=self.device)
-                runtime.launch_rows(self.kernels.assemble_entries, len(rows),
+                launch_rows(self.kernels.assemble_entries, len(rows),
                                     lambda start, stop: [start, self.surface, r, c, 1, block], self.device,
                                     extra_dim=len(cols))
                 points = (m * cols[:, None] + np.arange(m)).ravel()
@@ -463,7 +464,7 @@ class DoubleLayerOperator:
         p = wp.array(np.ascontiguousarray(poles), dtype=vec3, device=self.device)
         out = wp.empty((len(targets), len(poles)), dtype=self.kernels.green.mat33, device=self.device)
         # a few poles: light work, not worth the thread pool below some thousand targets
-        runtime.launch_rows(self.kernels.point_force_tensors, len(targets),
+        launch_rows(self.kernels.point_force_tensors, len(targets),
                             lambda start, stop: [start, t, p, out[start:stop]], self.device, extra_dim=len(poles),
                             threaded=len(targets) * len(poles) > 20000)
         return out.numpy().astype(np.float64)
@@ -498,7 +499,7 @@ class DoubleLayerOperator:
         t = wp.array(np.ascontiguousarray(targets, dtype=self.np_dtype), dtype=vec3, device=self.device)
         q = wp.array(np.ascontiguousarray(density, dtype=self.np_dtype).reshape(-1, 3), dtype=vec3, device=self.device)
         out = wp.zeros(n, dtype=vec3, device=self.device)
-        runtime.launch_rows(self.kernels.field_at_points, n,
+        launch_rows(self.kernels.field_at_points, n,
                             lambda start, stop: [start, self.surface, q, t, *lists, out[start:stop]], self.device)
         velocity = out.numpy().astype(np.float64)
         if pole_forces is not None:
@@ -516,7 +517,7 @@ class DoubleLayerOperator:
         p = wp.array(np.ascontiguousarray(poles), dtype=vec3, device=self.device)
         f = wp.array(np.ascontiguousarray(forces), dtype=vec3, device=self.device)
         out = wp.zeros(len(targets), dtype=vec3, device=self.device)
-        runtime.launch_rows(
+        launch_rows(
             self.kernels.point_force_velocity, len(targets),
             lambda start, stop: [start, t, p, f, group, starts, items, out[start:stop]], self.device,
         )

@@ -51,6 +51,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import runtime
+from ..kernels.launch import launch_rows
 
 NEAR_FIELD_MODES = ("auto", "stored", "recomputed")
 STRENGTHS = 12  # per source: 9 double-layer components (density (x) area vector), 3 of a point force
@@ -331,7 +332,7 @@ class FarField:
         for offset in sorted({c for c, unused in self.offsets.values()}):
             sources = wp.array(self._proxies(level, "sources", offset), dtype=vec3, device=self.device)
             matrix = wp.empty((3 * size, STRENGTHS * size), dtype=self.kernels.green.dtype, device=self.device)
-            runtime.launch_rows(self.kernels.proxy_interactions, size,
+            launch_rows(self.kernels.proxy_interactions, size,
                                 lambda start, stop: [start, targets, sources, matrix], self.device, extra_dim=size)
             k = matrix.numpy().astype(np.float64, copy=False)
             values, vectors = np.linalg.eigh(k @ k.T)
