@@ -15,7 +15,6 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
-import warp as wp
 
 _POOL: ThreadPoolExecutor | None = None
 CHUNKS_PER_THREAD = 8
@@ -43,6 +42,8 @@ def launch_rows(kernel, n_rows: int, make_inputs, device, extra_dim: int | None 
     launch two-dimensional (rows x extra_dim). ``threaded=False``: one launch, for work too
     light to pay for the thread pool's hand-offs.
     """
+    import warp as wp  # here, not at the top: `import warpbem` must not load Warp (tests/unit/test_package.py)
+
     blocks = row_blocks(n_rows, device) if threaded else [(0, n_rows)]
 
     def run(block):
