@@ -19,7 +19,7 @@ from common import best_time, print_table, write_csv
 from warpbem import Body, mesh, runtime
 from warpbem.kernels import launch
 from warpbem.hydro.geometry import SurfaceGeometry
-from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions
+from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions
 
 
 def cases(subdivisions):
@@ -50,12 +50,12 @@ def main():
             launch.CHUNKS_PER_THREAD = per_thread
 
             def assemble():
-                DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="dense").assemble()
+                BoundaryOperator(geometry, True).discrete("dense").matrix()
 
             def self_blocks():  # the matrix-free set-up: row sums over each element's own body
-                DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="matrix_free")._self_blocks()
+                BoundaryOperator(geometry, True).discrete("matrix_free").self_blocks()
 
-            op = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="matrix_free")
+            op = BoundaryOperator(geometry, True).discrete("matrix_free")
             op.matvec(q)  # compile and build the self blocks outside the timing
             times[split] = (best_time(assemble, args.repeats), best_time(self_blocks, args.repeats),
                             best_time(lambda: op.matvec(q), args.repeats))

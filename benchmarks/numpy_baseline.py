@@ -1,7 +1,7 @@
 """Plain NumPy (vectorised, no Warp) apply of the same double-layer operator, the baseline the
 scale benchmark measures Warp against. Regular Gauss points only (no adaptive subdivision), so
 compare it with the Warp operator built with ``adaptive=False``; the self element enters through
-the constant-density identity exactly as in warpbem/hydro/operators.py:
+the constant-density identity exactly as in warpbem/hydro/operators/description.py:
 
     ((1/2 + D) q)_a = sum_{b in body(a)} I_ab (q_b - q_a) + sum_{b not in body(a)} I_ab q_b,
 

@@ -30,9 +30,9 @@ import numpy_baseline
 from common import arguments, best_time, output, print_table, pyplot, save_chart, write_csv
 from warpbem import Body, ContactResolutionWarning, MobilitySolver, mesh, runtime
 from warpbem.hydro.geometry import SurfaceGeometry
-from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions
+from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions
 from warpbem.hydro.treecode import TreecodeOptions
-from warpbem.kernels import launch
+from warpbem.kernels import integrals
 from warpbem.hydro.options import SolverOptions
 
 
@@ -55,19 +55,15 @@ def cells(n):
     return [Body(sphere, position=(3.0 * (i % side), 3.0 * (i // side), 1.5)) for i in range(n)]
 
 
-def direct_rows(operator: DoubleLayerOperator, q: np.ndarray, points: np.ndarray) -> np.ndarray:
+def direct_rows(operator, q: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Rows of the direct product (1/2 + D) q at the given collocation points: their rows of
     the matrix assembled (all elements) and applied, with their self blocks."""
     wp = runtime.init()
     geo = operator.geometry
-    device = operator.device
-    block = wp.empty((3 * len(points), 3 * geo.n_points), dtype=operator.kernels.green.dtype, device=device)
-    rows = wp.array(points.astype(np.int32), dtype=int, device=device)
-    cols = wp.array(np.arange(geo.n_elements, dtype=np.int32), dtype=int, device=device)
-    launch.launch_rows(operator.kernels.assemble_entries, len(points),
-                        lambda start, stop: [start, operator.surface, rows, cols, 1, block], device,
-                        extra_dim=geo.n_elements)
-    own = np.einsum("aij,aj->ai", operator._self_blocks().numpy()[points], q.reshape(-1, 3)[points]).ravel()
+    block = wp.empty((3 * len(points), 3 * geo.n_points), dtype=operator.kernels.green.dtype, device=operator.device)
+    integrals.assemble_entries(operator.kernels, operator.device, operator.surface, points, np.arange(geo.n_elements),
+                               block, compact=True)
+    own = np.einsum("aij,aj->ai", operator.self_blocks().numpy()[points], q.reshape(-1, 3)[points]).ravel()
     return block.numpy() @ q + own
 
 
@@ -107,11 +103,10 @@ def main():
         row = dict(cells=n, elements=geometry.n_elements, matrix_GB=matrix_gb)
         reference = None
         if n <= args.direct_max:
-            plain = DoubleLayerOperator(geometry, True, QuadratureOptions(adaptive=False), device=device,
-                                        mode="matrix_free")
+            plain = BoundaryOperator(geometry, True, QuadratureOptions(adaptive=False)).discrete("matrix_free", device)
             plain.matvec(q)  # compile, self blocks
             row["warp_free_apply_s"], row["cores_free_apply"] = cores_busy(lambda: plain.matvec(q))
-            adaptive = DoubleLayerOperator(geometry, True, QuadratureOptions(), device=device, mode="matrix_free")
+            adaptive = BoundaryOperator(geometry, True, QuadratureOptions()).discrete("matrix_free", device)
             reference = adaptive.matvec(q)
             row["direct_product_s"] = best_time(lambda: adaptive.matvec(q), 1)
             if n <= args.numpy_max:
@@ -119,8 +114,8 @@ def main():
                 row["numpy_over_warp"] = row["numpy_apply_s"] / row["warp_free_apply_s"]
                 row["max_abs_diff"] = float(np.abs(numpy_baseline.apply(geometry, q, True) - plain.matvec(q)).max())
         if matrix_gb <= args.dense_max_gb:
-            dense = DoubleLayerOperator(geometry, True, QuadratureOptions(), device=device, mode="dense")
-            row["assembly_s"], row["cores_assembly"] = cores_busy(dense.assemble)
+            dense = BoundaryOperator(geometry, True, QuadratureOptions()).discrete("dense", device)
+            row["assembly_s"], row["cores_assembly"] = cores_busy(dense.matrix)
             row["dense_product_s"] = best_time(lambda: dense.matvec(q), 3)  # BLAS A @ x: the floor
             if reference is not None:
                 row["free_over_dense_apply"] = row["direct_product_s"] / row["dense_product_s"]
@@ -129,7 +124,7 @@ def main():
         for tolerance in args.tolerances:
             label = f"{tolerance:.0e}"
             t = time.perf_counter()
-            tree = DoubleLayerOperator(geometry, True, QuadratureOptions(), device=device, mode="treecode",
+            tree = BoundaryOperator(geometry, True, QuadratureOptions()).discrete("treecode", device,
                                        treecode=TreecodeOptions(tolerance=tolerance))
             tree.matvec(q)  # the first product assembles the stored near field
             row[f"tree{label}_setup_s"] = time.perf_counter() - t
@@ -225,11 +220,11 @@ def tolerance_sweep(args, device) -> list:
     bodies = cells(args.sweep_cells)
     geometry = SurfaceGeometry.from_bodies(bodies, QuadratureOptions().order, 1.0, True)
     q = np.random.default_rng(1).standard_normal(3 * geometry.n_elements)
-    exact = DoubleLayerOperator(geometry, True, QuadratureOptions(), device=device, mode="matrix_free").matvec(q)
+    exact = BoundaryOperator(geometry, True, QuadratureOptions()).discrete("matrix_free", device).matvec(q)
     rows = []
     for tolerance in args.sweep:
         t = time.perf_counter()
-        tree = DoubleLayerOperator(geometry, True, QuadratureOptions(), device=device, mode="treecode",
+        tree = BoundaryOperator(geometry, True, QuadratureOptions()).discrete("treecode", device,
                                    treecode=TreecodeOptions(tolerance=tolerance))
         out = tree.matvec(q)
         far = tree.far_field

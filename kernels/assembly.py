@@ -56,13 +56,12 @@ import warp as wp
 
 from .elements import make_element_functions
 from .greens import make_green_functions
+from .kinds import KINDS
 
 
 DENSITY_ORDERS = (1, 2, 3)
 MATVEC_CHUNK = 256  # matrix entries a thread block of ``dense_matvec`` reads at once
 MATVEC_BLOCK = 64  # its threads
-KINDS = ("double_layer", "adjoint_double_layer", "single_layer", "inverse_distance", "elastic_rotation",
-         "elastic_dyadic")
 
 
 @functools.lru_cache(maxsize=None)

@@ -196,16 +196,16 @@ def test_rigid_scenes_build_no_traction_or_elastic_operator(monkeypatch):
     """Model no more than a scene needs (issue 10 item 9): a rigid cell settling in shear with
     repulsion and an adherent neighbour assembles double layers only, never the adjoint
     (traction), single-layer or elastic operators."""
-    from warpbem.hydro import operators
+    from warpbem.hydro.operators import DiscreteOperator
 
     kinds = []
-    original = operators.DoubleLayerOperator.__init__
+    original = DiscreteOperator.__init__
 
-    def recording(self, *args, **kwargs):
-        kinds.append(kwargs.get("kind", "double_layer"))
-        original(self, *args, **kwargs)
+    def recording(self, description, *args, **kwargs):
+        kinds.append(description.kind)
+        original(self, description, *args, **kwargs)
 
-    monkeypatch.setattr(operators.DoubleLayerOperator, "__init__", recording)
+    monkeypatch.setattr(DiscreteOperator, "__init__", recording)
     m = wb.mesh.sphere(A, 2)
     gravity = Gravity([m, m], [False, True], [1050.0, 1000.0], 1000.0, STANDARD_GRAVITY)
     model = Model([m, m], [False, True], Flow(100.0, 1.2e-3), interactions=[gravity, Repulsion()],

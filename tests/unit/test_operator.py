@@ -1,4 +1,4 @@
-"""The double-layer operator (warpbem/hydro/operators.py): identity, quadrature, apply modes."""
+"""The boundary-integral operators (warpbem/hydro/operators/): identity, quadrature, discrete forms."""
 
 import numpy as np
 import pytest
@@ -6,14 +6,14 @@ import pytest
 from warpbem import Body, mesh, runtime
 from warpbem.kernels import launch
 from warpbem.hydro.geometry import SurfaceGeometry
-from warpbem.hydro.mobility import CompletedDoubleLayer
-from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions, choose_operator
+from warpbem.hydro.completed_double_layer import CompletedDoubleLayer
+from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions, choose_mode
 
 
 def make_operator(bodies, wall, mode="dense", device="cpu", kind="double_layer", **quadrature):
     options = QuadratureOptions(**{"order": 3, **quadrature})
     geometry = SurfaceGeometry.from_bodies(bodies, options.order, 1.0, wall)
-    return DoubleLayerOperator(geometry, wall, options, "float64", device, mode, kind=kind)
+    return BoundaryOperator(geometry, wall, options, kind).discrete(mode, device)
 
 
 def two_spheres_near_wall():
@@ -45,6 +45,27 @@ def test_dense_and_matrix_free_agree(device, rng, kind):
     np.testing.assert_allclose(free.matvec(q), dense.matvec(q), rtol=0, atol=1e-12 * np.abs(q).sum())
 
 
+def test_every_discrete_form_is_a_linear_operator_of_the_same_matrix(rng):
+    """The dense form's assembled matrix, the direct sum's and the treecode's products with
+    every unit vector (``to_dense``) are one operator: the direct sum to round-off, the treecode
+    (one leaf here holds every element, so all is near field) likewise; and each answers
+    SciPy's LinearOperator protocol (``@``) as its own ``apply``."""
+    geometry = SurfaceGeometry.from_bodies(two_spheres_near_wall(), 2, 1.0, True)
+    description = BoundaryOperator(geometry, True)
+    forms = {mode: description.discrete(mode) for mode in ("dense", "matrix_free", "treecode")}
+    matrices = {mode: form.to_dense() for mode, form in forms.items()}
+    scale = np.abs(matrices["dense"]).max()
+    for mode in ("matrix_free", "treecode"):
+        np.testing.assert_allclose(matrices[mode], matrices["dense"], rtol=0, atol=1e-13 * scale)
+    q = rng.standard_normal(description.size)
+    for form in forms.values():
+        np.testing.assert_array_equal(form @ q, form.apply(q))
+    with pytest.raises(ValueError, match="double layer only"):
+        BoundaryOperator(geometry, True, kind="single_layer").discrete("treecode")
+    with pytest.raises(ValueError, match="operator kind"):
+        BoundaryOperator(geometry, True, kind="stokeslet")
+
+
 def test_cpu_row_split_is_deterministic(monkeypatch, rng):
     q = rng.standard_normal(make_operator(two_spheres_near_wall(), True).size)
     results = []
@@ -64,7 +85,7 @@ def test_cpu_row_split_is_deterministic(monkeypatch, rng):
 def _block(op, row_body, col_body):
     a0, a1 = op.geometry.body_ranges[row_body]
     b0, b1 = op.geometry.body_ranges[col_body]
-    return op.assemble().numpy()[3 * a0:3 * a1, 3 * b0:3 * b1]
+    return op.to_dense()[3 * a0:3 * a1, 3 * b0:3 * b1]
 
 
 @pytest.mark.parametrize("wall, gap", [(False, 1e-2), (False, 1e-3), (True, 1e-2), (True, 1e-3)])
@@ -105,16 +126,16 @@ def test_cdl_spectrum_lies_in_the_right_half_plane():
 
 
 def test_auto_mode_follows_the_one_rule():
-    """mode="auto" of any operator (the traction's too) is choose_operator's: dense while the
+    """mode="auto" of any operator (the traction's too) is choose_mode's: dense while the
     matrix takes at most a quarter of the device's memory, else the treecode for the double
     layer and matrix-free for the other kinds."""
     bodies = two_spheres_near_wall()
     geometry = SurfaceGeometry.from_bodies(bodies, 3, 1.0, True)
-    assert DoubleLayerOperator(geometry, True, QuadratureOptions()).mode == "dense"  # 0.84 MB here
-    assert DoubleLayerOperator(geometry, True, QuadratureOptions(), kind="adjoint_double_layer").mode == "dense"
+    assert BoundaryOperator(geometry, True).discrete().mode == "dense"  # 0.84 MB here
+    assert BoundaryOperator(geometry, True, kind="adjoint_double_layer").discrete().mode == "dense"
     too_large = int(np.sqrt(runtime.total_memory(runtime.resolve_device("cpu")) / 8)) + 1
-    assert choose_operator(too_large) == "treecode"
-    assert choose_operator(too_large, kind="single_layer") == "matrix_free"
+    assert choose_mode(too_large) == "treecode"
+    assert choose_mode(too_large, kind="single_layer") == "matrix_free"
 
 
 @pytest.mark.parametrize("mode", ["dense", "matrix_free"])
@@ -126,7 +147,7 @@ def test_single_layers_of_a_uniform_density_on_a_sphere(mode, kind, exact, devic
     3.6e-4 and 6.2e-5 measured)."""
     options = QuadratureOptions(order=2)
     geometry = SurfaceGeometry.from_bodies([Body(mesh.sphere(1.0, 4))], 2, 1.0, False)
-    op = DoubleLayerOperator(geometry, False, options, "float64", device, mode, kind=kind)
+    op = BoundaryOperator(geometry, False, options, kind).discrete(mode, device)
     density = np.tile([0.3, -0.2, 1.0], geometry.n_elements)
     u = op.matvec(density).reshape(-1, 3)
     assert np.abs(u - exact * density[:3]).max() < 1e-3 * exact
@@ -137,10 +158,10 @@ def test_self_blocks_written_on_the_device_equal_the_host_ones(kind, density_ord
     """The Warp kernels that write the self blocks where the matrix lives (CUDA: no round trip
     through the host), run here on the CPU, give the host's BLAS row sums (or Duffy blocks)."""
     geometry = SurfaceGeometry.from_bodies(two_spheres_near_wall(), 2, 1.0, True, density_order=density_order)
-    host = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="dense", kind=kind)
-    device = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="dense", kind=kind)
-    expected = host.assemble().numpy()
-    matrix = device.assemble()
+    host = BoundaryOperator(geometry, True, kind=kind).discrete("dense")
+    device = BoundaryOperator(geometry, True, kind=kind).discrete("dense")
+    expected = host.to_dense()
+    matrix = device.matrix()
     values = matrix.numpy()
     a, k = np.arange(geometry.n_points)[:, None, None], np.arange(3)
     diagonal = (3 * a + k[None, :, None], 3 * a + k[None, None, :])
@@ -156,7 +177,7 @@ def test_the_gpu_dense_product_kernel_matches_blas(rng, dtype):
     kernels/assembly.py), run on the CPU against NumPy's BLAS on the same matrix; a row length
     that is not a multiple of the chunk exercises the padded last chunk."""
     geometry = SurfaceGeometry.from_bodies(two_spheres_near_wall(), 2, 1.0, True)
-    op = DoubleLayerOperator(geometry, True, QuadratureOptions(), dtype, "cpu", "dense")
+    op = BoundaryOperator(geometry, True, dtype=dtype).discrete("dense", "cpu")
     assert op.size % 256 != 0
     q = rng.standard_normal(op.size)
     blas = op.matvec(q)

@@ -8,9 +8,9 @@ import pytest
 
 import warpbem as wb
 from warpbem import runtime
-from warpbem.hydro import operators
+from warpbem.kernels import integrals
 from warpbem.hydro.geometry import SurfaceGeometry
-from warpbem.hydro.operators import DoubleLayerOperator, QuadratureOptions, choose_operator
+from warpbem.hydro.operators import BoundaryOperator, choose_mode
 from warpbem.hydro.treecode import TreecodeOptions, chebyshev_points, interaction_offsets, lagrange_basis
 
 
@@ -28,7 +28,7 @@ def array_8x8():
         warnings.simplefilter("ignore", wb.ContactResolutionWarning)
         geometry = SurfaceGeometry.from_bodies(grid_of_spheres(8), 2, 1.0, True)
     poles = geometry.centres
-    direct = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="matrix_free")
+    direct = BoundaryOperator(geometry, True).discrete("matrix_free")
     rng = np.random.default_rng(7)
     q, forces = rng.standard_normal(3 * geometry.n_points), rng.standard_normal(poles.shape)
     return geometry, poles, q, forces, direct.matvec(q), direct.point_force_velocity(geometry.collocation, poles, forces)
@@ -76,7 +76,7 @@ def test_treecode_product_matches_the_direct_sum_within_its_tolerance(array_8x8,
     sum of the same element integrals: relative error below the tolerance asked for
     (TreecodeOptions), with more points per box for the tighter one."""
     geometry, poles, q, forces, exact, exact_forces = array_8x8
-    tree = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="treecode",
+    tree = BoundaryOperator(geometry, True).discrete("treecode",
                                treecode=TreecodeOptions(tolerance=tolerance), point_sources=poles)
     assert tree.far_field.tree.levels == 3
     error = np.linalg.norm(tree.matvec(q) - exact) / np.linalg.norm(exact)
@@ -85,7 +85,7 @@ def test_treecode_product_matches_the_direct_sum_within_its_tolerance(array_8x8,
     # near double layer), so their relative error runs to a few times the tolerance (treecode.py)
     velocity = tree.point_sources_velocity(forces)
     assert np.linalg.norm(velocity - exact_forces) / np.linalg.norm(exact_forces) < 3 * tolerance
-    both = tree.matvec(q, forces)  # one pass for both: linear, the sum of the two
+    both = tree.apply(q, forces)  # one pass for both: linear, the sum of the two
     np.testing.assert_allclose(both, tree.matvec(q) + velocity.ravel(), atol=1e-12 * np.abs(both).max())
 
 
@@ -93,7 +93,7 @@ def test_stored_and_recomputed_near_fields_agree(array_8x8):
     """The near field assembled once (BLAS) and recomputed in each product are the same exact
     element integrals."""
     geometry, poles, q, *unused = array_8x8
-    stored, recomputed = (DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="treecode",
+    stored, recomputed = (BoundaryOperator(geometry, True).discrete("treecode",
                                               treecode=TreecodeOptions(tolerance=1e-3, near_field=mode))
                           for mode in ("stored", "recomputed"))
     assert stored.near_field_stored and not recomputed.near_field_stored
@@ -104,8 +104,8 @@ def test_treecode_without_far_field_is_the_direct_sum():
     """A scene narrower than two leaves has no far field: every element is near."""
     geometry = SurfaceGeometry.from_bodies(grid_of_spheres(2), 2, 1.0, True)
     q = np.random.default_rng(3).standard_normal(3 * geometry.n_points)
-    tree = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="treecode")
-    direct = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="matrix_free")
+    tree = BoundaryOperator(geometry, True).discrete("treecode")
+    direct = BoundaryOperator(geometry, True).discrete("matrix_free")
     assert not tree.far_field.has_far_field
     np.testing.assert_allclose(tree.matvec(q), direct.matvec(q), rtol=0, atol=1e-12)
 
@@ -131,13 +131,13 @@ def test_solver_with_the_treecode_matches_the_dense_solve():
 
 def test_automatic_operator_is_decided_once_from_total_memory(monkeypatch):
     """"auto": dense while the matrix takes at most a quarter of the device's total memory,
-    else the treecode; decided at a solver's first solve and kept for the run, whatever the
-    memory does after (a run that chose by free memory flipped to matrix-free part-way)."""
+    else the treecode; decided when a solver is built (given its unknowns) or at its first solve,
+    and kept for the run, whatever the memory does after (a run that chose by free memory flipped to matrix-free part-way)."""
     size = 3000
     monkeypatch.setattr(runtime, "total_memory", lambda device: 4 * size**2 * 8)
-    assert choose_operator(size) == "dense"
-    assert choose_operator(size + 1) == "treecode"
-    assert choose_operator(2 * size, "float32") == "treecode" and choose_operator(size, "float32") == "dense"
+    assert choose_mode(size) == "dense"
+    assert choose_mode(size + 1) == "treecode"
+    assert choose_mode(2 * size, "float32") == "treecode" and choose_mode(size, "float32") == "dense"
 
     solver = wb.MobilitySolver(shear_rate=1.0, options=wb.SolverOptions(density_order=1))
     body = [wb.Body(wb.mesh.sphere(1.0, 2), position=(0, 0, 2.0))]
@@ -146,6 +146,11 @@ def test_automatic_operator_is_decided_once_from_total_memory(monkeypatch):
     moved = [wb.Body(wb.mesh.sphere(1.0, 2), position=(0.5, 0, 2.0))]
     assert solver.solve(moved).operator_mode == "dense"
     assert wb.MobilitySolver(shear_rate=1.0, options=wb.SolverOptions(density_order=1)).solve(moved).operator_mode == "treecode"
+    # told its unknowns, a solver decides when it is built, by the same rule, and keeps it
+    monkeypatch.setattr(runtime, "total_memory", lambda device: 4 * size**2 * 8)
+    built = wb.MobilitySolver(shear_rate=1.0, options=wb.SolverOptions(density_order=1), unknowns=size + 1)
+    assert built.mode == "treecode" and built.operator_description == "treecode"
+    assert wb.MobilitySolver(unknowns=size).mode == "dense" and wb.MobilitySolver().mode is None
 
 
 def test_treecode_options_are_checked():
@@ -158,9 +163,9 @@ def test_treecode_options_are_checked():
         wb.SolverOptions(operator="fmm")
     geometry = SurfaceGeometry.from_bodies(grid_of_spheres(1), 2, 1.0, True)
     with pytest.raises(ValueError, match="double layer"):
-        DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="treecode", kind="single_layer")
+        BoundaryOperator(geometry, True, kind="single_layer").discrete("treecode")
     with pytest.raises(ValueError, match="treecode only"):
-        DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="dense").matvec(
+        BoundaryOperator(geometry, True).discrete("dense").apply(
             np.zeros(3 * geometry.n_points), np.zeros((7, 3)))
 
 
@@ -174,19 +179,15 @@ def test_interaction_matrices_follow_from_their_symmetry_class():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", wb.ContactResolutionWarning)
         geometry = SurfaceGeometry.from_bodies(grid_of_spheres(6, refinement=1), 2, 1.0, True)
-    tree = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="treecode",
+    tree = BoundaryOperator(geometry, True).discrete("treecode",
                                treecode=TreecodeOptions(tolerance=1e-2)).far_field
     level = 2
-    wp = runtime.init()
-    vec3 = tree.kernels.green.vec3
-    targets = wp.array(tree._proxies(level, "targets"), dtype=vec3)
+    targets = tree._proxies(level, "targets")
     size = len(targets)
 
     def direct(offset):
-        sources = wp.array(tree._proxies(level, "sources", offset), dtype=vec3)
-        out = wp.empty((3 * size, STRENGTHS * size), dtype=tree.kernels.green.dtype)
-        wp.launch(tree.kernels.proxy_interactions, dim=(size, size), inputs=[0, targets, sources, out])
-        return out.numpy()
+        return integrals.proxy_interactions(tree.kernels, tree.device, targets, tree._proxies(level, "sources", offset),
+                                            STRENGTHS)
 
     symmetries = square_symmetries()
     for offset, (canonical, index) in tree.offsets.items():
@@ -203,9 +204,9 @@ def test_preconditioner_blocks_cut_from_the_stored_near_field_equal_the_assemble
     """Each body's own block, cut from the treecode's stored near field, is the block of the
     dense operator (the same element integrals and self blocks)."""
     geometry, *unused = array_8x8
-    tree = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="treecode",
+    tree = BoundaryOperator(geometry, True).discrete("treecode",
                                treecode=TreecodeOptions(tolerance=1e-3, near_field="stored"))
-    dense = DoubleLayerOperator(geometry, True, QuadratureOptions(), mode="dense")
+    dense = BoundaryOperator(geometry, True).discrete("dense")
     bodies = [0, 9, 63]
     assert all(tree._block_from_near_field(p) is not None for p in bodies)
     cut, assembled = tree.diagonal_blocks(bodies), dense.diagonal_blocks(bodies)

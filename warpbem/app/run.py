@@ -93,7 +93,7 @@ def run(scene_path, output, overrides=(), device="cpu", resume=False, progress=p
             stop = scene.next_stop(state.time)
             state, frame = sim.step(state, stop)
             steps += 1
-            if steps == 1:  # decided at the first solve from the scene's size, kept for the run
+            if steps == 1:  # decided when the solver was built (or, with the near-far split, at its first solve)
                 attrs["operator"] = sim.mobility.operator_description
             if scene.frame_due(state, stop):
                 writer.append(**frame.columns())

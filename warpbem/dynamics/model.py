@@ -22,12 +22,18 @@ from .integrate import DEFAULT_SCHEME, SCHEMES
 from .state import State
 
 
-def build_solver(options: SolverOptions, flow: Flow, device, fixed_cells: int = 0) -> MobilitySolver | FrozenArraySolver:
+def build_solver(options: SolverOptions, flow: Flow, device, fixed_cells: int = 0,
+                 unknowns: int | None = None) -> MobilitySolver | FrozenArraySolver:
     """The mobility solver of a model's ``options`` (resolved for time stepping) and ``flow``,
     with the near-far split of frozen adherent arrays (``hydro/frozen.py``) where the options
-    take it for ``fixed_cells`` fixed cells (``SolverOptions.splits_near_far``)."""
-    solver = MobilitySolver(flow.shear_rate, flow.viscosity, flow.wall, device, options.resolved(time_stepping=True))
-    return FrozenArraySolver(solver, options.near_far_cutoff) if options.splits_near_far(fixed_cells) else solver
+    take it for ``fixed_cells`` fixed cells (``SolverOptions.splits_near_far``). Without the
+    split the operator's mode is decided here from ``unknowns`` (``Model.unknowns``) if given;
+    with it, at the first solve of the near cells, which are fewer."""
+    options = options.resolved(time_stepping=True)
+    if options.splits_near_far(fixed_cells):
+        return FrozenArraySolver(MobilitySolver(flow.shear_rate, flow.viscosity, flow.wall, device, options),
+                                 options.near_far_cutoff)
+    return MobilitySolver(flow.shear_rate, flow.viscosity, flow.wall, device, options, unknowns=unknowns)
 
 
 DT_MIN = 1e-5  # s: the shortest step by default (thesis ch. 3.3: 1e-4 to 1e-5 s), or dt_max if shorter
@@ -108,6 +114,11 @@ class Model:
     @property
     def n_bodies(self) -> int:
         return len(self.meshes)
+
+    @property
+    def unknowns(self) -> int:
+        """The mobility problem's unknowns before contact refinement: 3 per density point."""
+        return 3 * self.solver.density_order**2 * sum(len(m.elements) for m in self.meshes)
 
     @cached_property
     def fixed_mask(self) -> np.ndarray:

@@ -131,7 +131,7 @@ class Simulator:
     def __init__(self, model: Model, device="cpu"):
         self.model = model
         fixed_cells = int(model.fixed_mask.sum())
-        self.mobility = build_solver(model.solver, model.flow, device, fixed_cells)
+        self.mobility = build_solver(model.solver, model.flow, device, fixed_cells, model.unknowns)
         self.near_far_split = model.solver.near_far_report(fixed_cells)  # on or off, and why
         self.hydro = HydrodynamicSolves(model, self.mobility)
         self.gaps = GapFinder(device)

@@ -28,7 +28,7 @@ The background flow at the free cells' points comes from the solved density thro
 treecode (``treecode.py``): the far field of the whole array at every leaf's Chebyshev points is
 computed once (``FarField.local_values``), and each evaluation interpolates it in the leaf of
 the point and adds the leaf's own and 8 neighbours' elements and poles by the exact (adaptive)
-element integrals (``DoubleLayerOperator.field_at``). The tree covers the region of the bodies
+element integrals (``DiscreteOperator.field_at``). The tree covers the region of the bodies
 at set-up with a margin (``COVER_SHARE``); points beyond it (a free cell that left) are summed
 directly over every element, slower, with a warning.
 
@@ -45,8 +45,9 @@ import numpy as np
 
 from ..surfaces.gaps import candidate_pairs, outer_radius
 from ..surfaces.quad9 import CENTRE_NODE
-from .mobility import MobilitySolution, MobilitySolver, all_completion_poles, checked_bodies, checked_loads
-from .operators import DoubleLayerOperator, quadrature_strengths
+from .completed_double_layer import all_completion_poles
+from .mobility import MobilitySolution, MobilitySolver, checked_bodies, checked_loads
+from .operators import BoundaryOperator, quadrature_strengths
 from .options import DEFAULT_CUTOFF
 from .treecode import FarField, TreecodeOptions
 
@@ -84,8 +85,8 @@ class BackgroundField:
         loads = np.concatenate([system.fixed_loads(p, x) for p in range(len(bodies))])
         self.pole_forces = system.pole_forces(loads)
         poles = all_completion_poles(geo)
-        self.operator = DoubleLayerOperator(geo, solver.flow.wall, solver.quadrature, solver.options.dtype, solver.device,
-                                            "matrix_free", point_sources=poles)
+        self.operator = BoundaryOperator(geo, solver.flow.wall, solver.quadrature, "double_layer",
+                                         solver.options.dtype).discrete("matrix_free", solver.device, point_sources=poles)
         self.far = self.values = None
         if geo.n_elements < tree_elements:
             return

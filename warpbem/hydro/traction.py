@@ -58,7 +58,7 @@ from ..surfaces.placement import check_placement
 from .deflated import RigidModes, deflated_operator, deflated_solve
 from .geometry import SurfaceGeometry
 from .mobility import checked_loads, checked_bodies
-from .operators import DoubleLayerOperator, QuadratureOptions
+from .operators import BoundaryOperator, QuadratureOptions
 from .options import Flow, SolverOptions
 
 
@@ -123,9 +123,9 @@ class TractionSolution:
         rigid motion of each body, to the discretisation error (the single layer's weakly
         singular self element by Duffy triangles, ``kernels/assembly.py``)."""
         operator, _, _, length, stress_scale = self._single_layer
-        single = DoubleLayerOperator(operator.geometry, operator.wall, operator.quadrature, operator.dtype_name,
-                                     operator.device, operator.mode, kind="single_layer")
-        disturbance = single.matvec(self.traction.ravel() / stress_scale).reshape(-1, 3)
+        adjoint = operator.description
+        single = BoundaryOperator(adjoint.geometry, adjoint.wall, adjoint.quadrature, "single_layer", adjoint.dtype)
+        disturbance = single.discrete(operator.mode, operator.device).apply(self.traction.ravel() / stress_scale).reshape(-1, 3)
         ambient = np.zeros_like(self.points)
         ambient[:, 0] = self.shear_rate * self.points[:, 2]
         return ambient - disturbance * stress_scale * length / self.viscosity
@@ -195,8 +195,8 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = Flow.visc
                 np.abs(fluid_torque).max() / length**3)
     scale = scale if scale > 0 else 1.0
     quadrature = QuadratureOptions(order=options.quadrature_order, adaptive=options.adaptive_quadrature)
-    adjoint = DoubleLayerOperator(geometry, wall, quadrature, options.dtype, device,
-                                  options.operator, kind="adjoint_double_layer")
+    adjoint = BoundaryOperator(geometry, wall, quadrature, "adjoint_double_layer", options.dtype).discrete(
+        options.operator, device)
     # the right side in two parts, scaled: the ambient traction sigma_inf . n, and the rigid
     # modes' loads (the loads acting alone, without the flow: ``load_response``)
     normals = geometry.collocation_normals
@@ -208,7 +208,7 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = Flow.visc
         loads = np.concatenate([fluid_force[p] / (scale * length**2), fluid_torque[p] / (scale * length**3)])
         loads_rhs[rows] = rigid.modes[p] @ rigid.dual_of_loads(p, loads)
     # only the -1 eigenvalue of D* needs the deflation (module docstring): every body shifted
-    system = deflated_operator(lambda t, c: adjoint.matvec(t), rigid, np.ones(len(bodies), bool),
+    system = deflated_operator(lambda t, c: adjoint.apply(t), rigid, np.ones(len(bodies), bool),
                                non_rigid_part=False)
     result = deflated_solve(system, ambient + loads_rhs, options)
     alone = None

@@ -34,7 +34,7 @@ needs nothing of the kernel but its values, so the Blake (1971) wall images come
   factors (the far field between separated boxes has low numerical rank: Fong & Darve 2009,
   sec. 3.3), applied with BLAS;
 * the near field, a leaf's own and its 8 neighbours' elements, is left to the exact element
-  integrals (adaptive, self terms: ``DoubleLayerOperator``), the points of a leaf sharing one
+  integrals (adaptive, self terms: ``operators/treecode_form.py``), the points of a leaf sharing one
   list of near elements.
 
 The error of a product against the direct sum is tabulated over the tolerance in the README
@@ -51,7 +51,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import runtime
-from ..kernels.launch import launch_rows
+from ..kernels import integrals
 
 NEAR_FIELD_MODES = ("auto", "stored", "recomputed")
 STRENGTHS = 12  # per source: 9 double-layer components (density (x) area vector), 3 of a point force
@@ -324,17 +324,11 @@ class FarField:
         points of the box offset by c (Warp kernel ``proxy_interactions``): left the leading
         left singular vectors (from the eigenvectors of K K^T), right = K^T left. The other
         offsets follow by symmetry (``_proxy_permutations``)."""
-        wp = runtime.init()
-        vec3 = self.kernels.green.vec3
-        targets = wp.array(self._proxies(level, "targets"), dtype=vec3, device=self.device)
-        size = len(targets)
+        targets = self._proxies(level, "targets")
         out = {}
         for offset in sorted({c for c, unused in self.offsets.values()}):
-            sources = wp.array(self._proxies(level, "sources", offset), dtype=vec3, device=self.device)
-            matrix = wp.empty((3 * size, STRENGTHS * size), dtype=self.kernels.green.dtype, device=self.device)
-            launch_rows(self.kernels.proxy_interactions, size,
-                                lambda start, stop: [start, targets, sources, matrix], self.device, extra_dim=size)
-            k = matrix.numpy().astype(np.float64, copy=False)
+            k = integrals.proxy_interactions(self.kernels, self.device, targets, self._proxies(level, "sources", offset),
+                                             STRENGTHS)
             values, vectors = np.linalg.eigh(k @ k.T)
             sigma = np.sqrt(np.maximum(values[::-1], 0.0))
             rank = max(1, int(np.count_nonzero(sigma > RANK_SHARE * self.options.tolerance * sigma[0])))
