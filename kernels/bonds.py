@@ -10,8 +10,8 @@ reference point, ``receptor_body``); the receptors of adhesive body c are
 whose surface carries the ligand, ``bond_birth``: time of formation). One thread
 per cell sums its own rows in row order, so the reductions are deterministic on CPU and CUDA
 alike (no float atomics). Every kernel takes the index of its first thread (``first``), so
-the host can split a long launch over CPU threads (``launch.launch_rows``); no two threads
-write the same entry.
+its launcher (below the kernels, one per kernel: arrays in, output arrays filled) can split a
+long launch over CPU threads (``launch.launch_rows``); no two threads write the same entry.
 
 Hertz patch (thesis ch. 4.2, eq. 4.9). The cells are rigid in the mobility problem; their
 compliance enters through the contact patch: a tip at lateral distance rho from the patch
@@ -37,6 +37,10 @@ import math
 from types import SimpleNamespace
 
 import warp as wp
+
+from .launch import launch_rows
+
+SPLIT_THREADS = 4096  # launches at least this long are split over the CPU threads
 
 
 @functools.lru_cache(maxsize=None)
@@ -203,3 +207,53 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
     return SimpleNamespace(vec3=vec3, mat33=mat33, hertz_lowering=hertz_lowering, bond_geometry=bond_geometry,
                            reduce_per_cell=reduce_per_cell,
                            rupture=rupture, formation=formation, insert=insert, mark_bound=mark_bound)
+
+
+def _launch(kernel, device, n: int, arguments):
+    """Launch over n threads (the kernels' ``first`` offset prepended); on the CPU a long
+    launch is split over the thread pool, a short one is not worth the threads."""
+    if device.is_cpu and n >= SPLIT_THREADS:
+        launch_rows(kernel, n, lambda start, stop: [start, *arguments], device)
+    elif n:
+        wp.launch(kernel, dim=n, inputs=[0, *arguments], device=device)
+
+
+def bond_geometry(kernels, device, n: int, bond_receptor, bond_anchor, bond_offset, tips, receptor_body, positions,
+                  rotations, vector, moment):
+    """``vector`` and ``moment`` of the n table rows."""
+    _launch(kernels.bond_geometry, device, n, [bond_receptor, bond_anchor, bond_offset, tips, receptor_body, positions,
+                                               rotations, vector, moment])
+
+
+def reduce_per_cell(kernels, device, n: int, bond_receptor, moment, bond_force, capacity: int, force, torque, count):
+    """``force``, ``torque`` and ``count`` of the n adhesive cells."""
+    _launch(kernels.reduce_per_cell, device, n, [bond_receptor, moment, bond_force, capacity, force, torque, count])
+
+
+def rupture(kernels, device, n: int, bond_receptor, vector, spring, rest, compression: int, off_rate,
+            compliance_per_kt, dt, seed: int, draw: int, broken):
+    """``broken`` of the n table rows, and their ``bond_receptor`` freed."""
+    _launch(kernels.rupture, device, n, [bond_receptor, vector, spring, rest, compression, off_rate,
+                                         compliance_per_kt, dt, seed, draw, broken])
+
+
+def mark_bound(kernels, device, n: int, bond_receptor, bound):
+    """``bound`` set for the receptor of each of the n table rows."""
+    _launch(kernels.mark_bound, device, n, [bond_receptor, bound])
+
+
+def formation(kernels, device, n: int, bound, tips, receptor_body, positions, rotations, patch_centre, patch_radius,
+              curvature, rest, layer, spring_per_kt, compliance, on_rate, dt, seed: int, draw: int, cell_anchor,
+              cell_deviation, cell_partner, candidate, anchor, offset, partner):
+    """``candidate``, ``anchor``, ``offset`` and ``partner`` of the n receptors."""
+    _launch(kernels.formation, device, n, [bound, tips, receptor_body, positions, rotations, patch_centre,
+                                           patch_radius, curvature, rest, layer, spring_per_kt, compliance, on_rate,
+                                           dt, seed, draw, cell_anchor, cell_deviation, cell_partner, candidate,
+                                           anchor, offset, partner])
+
+
+def insert(kernels, device, n: int, candidate, anchor, offset, partner, receptor_start, capacity: int, time,
+           bond_receptor, bond_anchor, bond_offset, bond_partner, bond_birth, bound):
+    """The new bonds of the n adhesive cells into their table rows, and ``bound`` set."""
+    _launch(kernels.insert, device, n, [candidate, anchor, offset, partner, receptor_start, capacity, time,
+                                        bond_receptor, bond_anchor, bond_offset, bond_partner, bond_birth, bound])

@@ -9,7 +9,7 @@ quadratically, so the gap is exact to round-off and varies smoothly as bodies mo
 electrostatic repulsion (thesis eq. 3.1) changes e-fold over 1/tau = 0.5 nm and cannot use a
 sampled gap (sampling errors near contact are tens of nanometres for 96-element cells).
 Newton rather than alternating projections, which converge at the rate (a/(a + gap))^2 per
-sweep, too slowly near contact.
+sweep, too slowly near contact. The launchers below the kernels fill the caller's arrays.
 """
 
 import functools
@@ -144,3 +144,15 @@ def build_contact_kernels(dtype) -> SimpleNamespace:
         point_a[i] = xa
 
     return SimpleNamespace(closest_points=closest_points, closest_to_points=closest_to_points, vec3=vec3)
+
+
+def closest_points(kernels, device, n: int, nodes_a, element_a, nodes_b, element_b, to_wall: int, point_a, point_b):
+    """``point_a`` and ``point_b`` of the n candidate pairs (to the wall when ``to_wall`` is 1)."""
+    wp.launch(kernels.closest_points, dim=n, device=device,
+              inputs=[nodes_a, element_a, nodes_b, element_b, to_wall, point_a, point_b])
+
+
+def closest_to_points(kernels, device, n: int, nodes_a, element_a, targets, point_a):
+    """``point_a`` of the n candidate pairs."""
+    wp.launch(kernels.closest_to_points, dim=n, device=device, inputs=[nodes_a, element_a, targets],
+              outputs=[point_a])

@@ -1,6 +1,7 @@
 """Receptor-ligand adhesion (thesis ch. 4): Hookean bonds (eq. 4.3, 4.4) with Bell kinetics
-(eq. 4.1, 4.2) by Monte Carlo, and the Hertz contact patch (eq. 4.8, 4.9). The device code is
-``kernels/bonds.py``; this module holds the parameters, the receptors and the protocol.
+(eq. 4.1, 4.2) by Monte Carlo, and the Hertz contact patch (eq. 4.8, 4.9). The device code and
+its launchers are ``kernels/bonds.py``; this module holds the parameters, the receptors and the
+protocol.
 
 Model, written down (SI):
 
@@ -47,7 +48,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import runtime
-from ..kernels.launch import launch_rows
 from ..options import OptionError, declared, option, validate
 from ..surfaces import quad9
 from ..surfaces.gaps import WALL, bounding_spheres
@@ -57,7 +57,6 @@ from .repulsion import Repulsion
 
 BOLTZMANN = 1.380649e-23  # J/K
 APPROACH_MARGIN = 100e-9  # m: a cell approaches the wall far less than this in one step
-SPLIT_THREADS = 4096  # launches at least this long are split over the CPU threads
 
 
 @dataclass(frozen=True)
@@ -261,21 +260,15 @@ class Adhesion(Interaction):
                 wp.array(part["anchor"], dtype=k.vec3, device=self.device),
                 wp.array(part["offset"], dtype=wp.float64, device=self.device))
 
-    def _launch(self, kernel, n: int, arguments):
-        """Launch over n threads (the kernels' ``first`` offset prepended); on the CPU a long
-        launch is split over the thread pool, a short one is not worth the threads."""
-        if self.device.is_cpu and n >= SPLIT_THREADS:
-            launch_rows(kernel, n, lambda start, stop: [start, *arguments], self.device)
-        elif n:
-            self.wp.launch(kernel, dim=n, inputs=[0, *arguments], device=self.device)
-
     def geometry(self, table, frame):
         """(vector, moment) device arrays of every table row (``kernels/bonds.py``)."""
+        from ..kernels import bonds  # here, not at the top: `import warpbem` must not load Warp
+
         wp, k = self.wp, self.k
         vector = wp.zeros(self.capacity, dtype=k.vec3, device=self.device)
         moment = wp.zeros(self.capacity, dtype=k.mat33, device=self.device)
-        self._launch(k.bond_geometry, self.capacity, [*table, frame["tips"], self._receptor_body, frame["positions"],
-                                                      frame["rotations"], vector, moment])
+        bonds.bond_geometry(k, self.device, self.capacity, *table, frame["tips"], self._receptor_body,
+                            frame["positions"], frame["rotations"], vector, moment)
         return vector, moment
 
     def _bonds_at(self, bodies, contacts, part, rows):
@@ -295,13 +288,15 @@ class Adhesion(Interaction):
 
     def reduce(self, receptor, moment, bond_force):
         """Per adhesive cell: force (N), torque (N m) and number of bonds (one thread per cell)."""
+        from ..kernels import bonds
+
         wp, k = self.wp, self.k
         cells = len(self.cells)
         force = wp.zeros(cells, dtype=k.vec3, device=self.device)
         torque = wp.zeros(cells, dtype=k.vec3, device=self.device)
         count = wp.zeros(cells, dtype=int, device=self.device)
         forces = wp.array(bond_force, dtype=k.vec3, device=self.device)
-        self._launch(k.reduce_per_cell, cells, [receptor, moment, forces, self.max_bonds, force, torque, count])
+        bonds.reduce_per_cell(k, self.device, cells, receptor, moment, forces, self.max_bonds, force, torque, count)
         return force.numpy(), torque.numpy(), count.numpy()
 
     # -- protocol ---------------------------------------------------------------------------
@@ -394,6 +389,8 @@ class Adhesion(Interaction):
         """Per receptor, the ligand on a ligand-bearing fixed cell nearest to its rest length:
         (anchor (R, 3), deviation (R,) m, partner (R,) body or -1), from the exact closest point
         of each candidate element (bounding spheres within ``cell_reach``) to the tip."""
+        from ..kernels import contact
+
         n = len(self.tips)
         anchor, deviation, partner = np.zeros((n, 3)), np.full(n, 1.0), np.full(n, -1, dtype=np.int32)
         if len(self.ligand_bodies):
@@ -414,10 +411,11 @@ class Adhesion(Interaction):
                 continue
             wp = self.wp
             points = wp.zeros(len(receptor), dtype=self.k.vec3, device=self.device)
-            wp.launch(self.contact.closest_to_points, dim=len(receptor), device=self.device, inputs=[
+            contact.closest_to_points(
+                self.contact, self.device, len(receptor),
                 wp.array(elements.reshape(-1, 3), dtype=self.k.vec3, device=self.device),
                 wp.array(element.astype(np.int32), dtype=int, device=self.device),
-                wp.array(tips[near[receptor]], dtype=self.k.vec3, device=self.device)], outputs=[points])
+                wp.array(tips[near[receptor]], dtype=self.k.vec3, device=self.device), points)
             # per candidate: distance r of the tip from the surface, the ligand at r - lambda
             # (clamped to the layer) along the line to the closest point
             points = points.numpy()
@@ -455,6 +453,8 @@ class Adhesion(Interaction):
     def advance_state(self, part, start_bodies, end_bodies, end_contacts, dt, end_time):
         """Rupture, then formation, at the end of the step (counter-based draws 2n and 2n + 1 of
         the seed's stream), then the new contact radius from the bonds' normal force there."""
+        from ..kernels import bonds
+
         if self.device is None:
             self.prepare("cpu")
         wp, k = self.wp, self.k
@@ -464,28 +464,28 @@ class Adhesion(Interaction):
         frame = self._frame(end_bodies, end_contacts, part)
         vector, _ = self.geometry(table, frame)
         broken = wp.zeros(self.capacity, dtype=int, device=self.device)
-        self._launch(k.rupture, self.capacity, [
-            receptor, vector, self.spring_constant, self.equilibrium_length, int(self.compression), self.off_rate,
-            self.reactive_compliance / self.thermal_energy, dt, self.seed, 2 * draw, broken])
+        bonds.rupture(k, self.device, self.capacity, receptor, vector, self.spring_constant, self.equilibrium_length,
+                      int(self.compression), self.off_rate, self.reactive_compliance / self.thermal_energy, dt,
+                      self.seed, 2 * draw, broken)
         n_receptors = len(self.tips)
         bound = wp.zeros(n_receptors, dtype=int, device=self.device)
-        self._launch(k.mark_bound, self.capacity, [receptor, bound])
+        bonds.mark_bound(k, self.device, self.capacity, receptor, bound)
         cell_anchor, cell_deviation, cell_partner = self.cell_ligands(end_contacts.shapes)
         candidate = wp.zeros(n_receptors, dtype=int, device=self.device)
         ligand = wp.zeros(n_receptors, dtype=k.vec3, device=self.device)
         lowering = wp.zeros(n_receptors, dtype=wp.float64, device=self.device)
         chosen = wp.zeros(n_receptors, dtype=int, device=self.device)
-        self._launch(k.formation, n_receptors, [
+        bonds.formation(
+            k, self.device, n_receptors,
             bound, frame["tips"], self._receptor_body, frame["positions"], frame["rotations"], frame["patch_centre"],
             frame["patch_radius"], frame["curvature"], self.equilibrium_length, self.ligand_layer,
             self.spring_constant / self.thermal_energy, self.reactive_compliance, self.effective_on_rate, dt,
             self.seed, 2 * draw + 1, wp.array(cell_anchor, dtype=k.vec3, device=self.device),
             wp.array(cell_deviation, dtype=wp.float64, device=self.device),
-            wp.array(cell_partner, dtype=int, device=self.device), candidate, ligand, lowering, chosen])
+            wp.array(cell_partner, dtype=int, device=self.device), candidate, ligand, lowering, chosen)
         partner = wp.array(part["partner"].astype(np.int32), dtype=int, device=self.device)
-        self._launch(k.insert, len(self.cells), [candidate, ligand, lowering, chosen, self._receptor_start,
-                                                 self.max_bonds, end_time, receptor, anchor, offset, partner, birth,
-                                                 bound])
+        bonds.insert(k, self.device, len(self.cells), candidate, ligand, lowering, chosen, self._receptor_start,
+                     self.max_bonds, end_time, receptor, anchor, offset, partner, birth, bound)
         vector, moment = self.geometry(table, frame)
         on_wall = (partner.numpy() < 0)[:, None]
         force, _, count = self.reduce(receptor, moment, self.tip_forces(vector.numpy()) * on_wall)

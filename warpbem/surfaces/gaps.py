@@ -75,18 +75,21 @@ class GapFinder:
         wp.load_module(self.kernels.closest_points.module, device=self.device)
 
     def _search(self, nodes_a, element_a, nodes_b, element_b):
+        from ..kernels import contact
+
         wp, k = self.wp, self.kernels
         n = len(element_a)
         point_a = wp.zeros(n, dtype=k.vec3, device=self.device)
         point_b = wp.zeros(n, dtype=k.vec3, device=self.device)
         to_wall = nodes_b is None
         nodes_b = nodes_a if to_wall else nodes_b
-        wp.launch(k.closest_points, dim=n, device=self.device, inputs=[
+        contact.closest_points(
+            k, self.device, n,
             wp.array(nodes_a.reshape(-1, 3), dtype=k.vec3, device=self.device),
             wp.array(element_a.astype(np.int32), dtype=int, device=self.device),
             wp.array(nodes_b.reshape(-1, 3), dtype=k.vec3, device=self.device),
             wp.array(element_b.astype(np.int32), dtype=int, device=self.device), int(to_wall),
-            point_a, point_b])
+            point_a, point_b)
         return point_a.numpy(), point_b.numpy()
 
     def between(self, bodies, i: int, j: int) -> Gap:
