@@ -88,7 +88,7 @@ def test_heavy_cell_settles_at_brenners_speed_and_the_step_shrinks():
     gravity = Gravity([1050.0], 1000.0, 9.81)
     sim = Simulator(Model([m], [False], Flow(0.0, mu), interactions=[gravity],
                           policy=StepPolicy(dt_max=0.5, dt_min=0.05, contact_gap=1.5e-6)))
-    weight = gravity.force[0, 2]
+    weight = sim.model.bound("gravity").force[0, 2]
     assert np.isclose(weight, -50 * 9.81 * m.volume())
     state = State(0.0, np.array([[0.0, 0.0, 7.0e-6]]), np.array([[1.0, 0, 0, 0]]))
     steps = []
