@@ -1,6 +1,6 @@
-"""What an interaction is to the time step (DESIGN.md §3, step 3 "loads"): one object with a
-small protocol, so that a new force (bonds, Hertz contact, lubrication) plugs in without
-touching the step.
+"""What an interaction is to the time step (DESIGN.md §3, step 3 "loads"): a configuration
+that, bound to a model, answers a small protocol, so that a new force (bonds, Hertz contact,
+lubrication) plugs in without touching the step.
 
 Configuration and binding. An ``Interaction`` is a configuration: its parameters only (a
 spring constant, densities per body), frozen when made. The ``Model`` holds it beside the
