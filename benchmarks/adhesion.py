@@ -51,8 +51,8 @@ def kernel_throughput(device, sizes):
     for cells, cap in sizes:
         meshes = [mesh] * cells
         positions = np.array([[30e-6 * (i % 32), 30e-6 * (i // 32), REST] for i in range(cells)])
-        adh = Adhesion(meshes, [False] * cells, BondOptions(**TABLE_4_1, max_bonds=cap))
-        adh.prepare(device)
+        bonds = Adhesion(BondOptions(**TABLE_4_1, max_bonds=cap))
+        adh = bonds.bound(Model(meshes, [False] * cells, interactions=[bonds]), device)
         bodies = [Body(mesh, position=p) for p in positions]
         contacts = Contacts(bodies, [mesh.size()] * cells, True, GapFinder(device))
         part = adh.initial_state(bodies)
@@ -99,8 +99,8 @@ def _timed(fn):
 def rolling_model(k=3, reuse=2e-9, fraction=0.1, seed=1, dt_max=1e-4, cells=1, spacing=15e-6):
     mesh = wb.mesh.sphere(A, k)
     n = cells
-    gravity = Gravity([mesh] * n, [False] * n, [1050.0] * n, 1000.0, STANDARD_GRAVITY)
-    bonds = Adhesion([mesh] * n, [False] * n, BondOptions(**TABLE_4_1, seed=seed, max_bonds=200, kinetics_fraction=fraction), shear_modulus=[4e3] * n)
+    gravity = Gravity([1050.0] * n, 1000.0, STANDARD_GRAVITY)
+    bonds = Adhesion(BondOptions(**TABLE_4_1, seed=seed, max_bonds=200, kinetics_fraction=fraction), shear_modulus=[4e3] * n)
     model = Model([mesh] * n, [False] * n, Flow(100.0, 1e-3), interactions=[gravity, Repulsion(), bonds],
                   solver=SolverOptions(reuse_tolerance=reuse), policy=StepPolicy(dt_max, 1e-7, 1e-9), scheme="euler")
     positions = [[0.0, spacing * (i - (n - 1) / 2), REST] for i in range(n)]

@@ -51,7 +51,7 @@ def roscoe(ca):
 def cell(k, modulus, dt, wall, device, *, height=0.0, rigid=False, **options):
     mesh = wb.mesh.sphere(A, k)
     flow = Flow(SHEAR, MU, wall)
-    shape = [] if rigid else [Deformation([mesh], [True], [modulus], [NU], flow, DeformationOptions(**options))]
+    shape = [] if rigid else [Deformation([True], [modulus], [NU], DeformationOptions(**options))]
     model = Model([mesh], [False], flow, policy=StepPolicy(dt, 1e-7, 1e-9), scheme="euler", interactions=shape)
     return Simulator(model, device), model.initial_state([[0.0, 0.0, height]])
 

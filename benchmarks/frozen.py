@@ -145,7 +145,7 @@ def errors(args):
     model = loaded.model
     options = model.solver
     flow = model.flow
-    gravity = model.interaction("gravity")
+    gravity = model.bound("gravity")
     fixed_bodies = loaded.initial_bodies()[1:]
     free_mesh = loaded.bodies[0].mesh
     weight = np.zeros((len(fixed_bodies) + 1, 3))
@@ -354,7 +354,7 @@ def suspension(args):
 
     loaded = scenes.load(ROOT / "scenes" / SUSPENSION)
     model, bodies = loaded.model, loaded.initial_bodies()
-    weight = model.interaction("gravity").force
+    weight = model.bound("gravity").force
     free = ~model.fixed_mask
     rows = []
     with warnings.catch_warnings():

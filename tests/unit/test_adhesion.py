@@ -9,6 +9,7 @@ import pytest
 import warpbem as wb
 from warpbem.app import scene
 from warpbem.forces import hertz
+from warpbem.dynamics import Model
 from warpbem.forces.adhesion import BOLTZMANN, Adhesion, BondOptions
 from warpbem.surfaces.body import Body
 from warpbem.surfaces.gaps import Contacts, GapFinder
@@ -27,7 +28,9 @@ TABLE_4_1 = dict(receptor_density=20e12, spring_constant=5e-4, equilibrium_lengt
 
 
 def adhesion(**changes):
-    return Adhesion([MESH], [False], BondOptions(**{**TABLE_4_1, **changes}))
+    """The bonds of one free cell of MESH, bound on the CPU."""
+    bonds = Adhesion(BondOptions(**{**TABLE_4_1, **changes}))
+    return bonds.bound(Model([MESH], [False], interactions=[bonds]), "cpu")
 
 
 def test_receptors_are_microvillus_tips_spread_by_area():
@@ -107,7 +110,6 @@ def test_bond_loads_match_numpy_and_the_vector_law_is_exact():
     force sum_b F_b and torque sum_b (x_m - x_c) x F_b; and the implicit step's vector law:
     f = -dU/dx and its 3 x 3 stiffness by central differences (tension only and both)."""
     adh = adhesion(max_bonds=50)
-    adh.prepare("cpu")
     rng = np.random.default_rng(3)
     body = Body(MESH, position=(1e-6, -2e-6, A + 0.3e-6), orientation=(0.9, 0.1, -0.3, 0.2))
     part = adh.initial_state([body])
@@ -146,7 +148,6 @@ def test_formation_in_the_kernel_follows_eq_4_2():
     the mean over 300 independent draws of the kernel (within 4 standard errors); a draw
     depends only on (seed, counter): the same draw repeats exactly, another differs."""
     adh = adhesion(spring_constant=3e-6, max_bonds=2000)
-    adh.prepare("cpu")
     body = Body(MESH, position=(0, 0, A + 0.2e-6))
     contacts = Contacts([body], [MESH.size()], True, GapFinder())
     tips = body.position + adh.tips
@@ -268,7 +269,7 @@ def test_thesis_ch4_scenes_use_table_4_1(name, sigma, cells, cap, compression, d
         assert bonds.max_bonds == cap and bonds.poisson_ratio[0] == 0.33
         assert s.model.flow.shear_rate == 100.0 and s.model.flow.viscosity == 1e-3
         modulus = bonds.shear_modulus[0]
-        seen.add((None if modulus >= 1e12 else modulus, round(bonds.radius[0], 7)))
+        seen.add((None if modulus >= 1e12 else modulus, round(s.model.bound("bond").radius[0], 7)))
         options.add(bonds.compression)
         gap = s.bodies[0].position[2] - s.bodies[0].mesh.size()
         assert 230e-9 < gap < 250e-9  # released where gravity and eq. 3.1 balance (236 nm)

@@ -180,7 +180,7 @@ def test_a_run_with_the_split_steps_as_the_full_one_when_every_cell_is_near():
     for split in ("off", "on"):
         options = SolverOptions(contact_refinement=0.0, near_far_split=split, near_far_cutoff=1e-3)
         model = Model([cell] * 5, fixed, Flow(100.0, 1.2e-3),
-                      interactions=[Gravity([cell] * 5, fixed, [1050.0] * 5, 1000.0, STANDARD_GRAVITY), Repulsion()],
+                      interactions=[Gravity([1050.0] * 5, 1000.0, STANDARD_GRAVITY), Repulsion()],
                       solver=options, policy=StepPolicy(2e-3, 1e-6, 5e-7))
         sim = Simulator(model)
         state = model.initial_state(positions)

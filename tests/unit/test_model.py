@@ -10,7 +10,7 @@ import warpbem as wb
 from warpbem.app.io import TableWriter
 from warpbem.app.run import read_state
 from warpbem.dynamics import Flow, Model, Simulator, SolverOptions, State, StepPolicy, frame_columns
-from warpbem.forces import STANDARD_GRAVITY, ExternalLoads, Gravity, Interaction, Repulsion
+from warpbem.forces import STANDARD_GRAVITY, BoundInteraction, ExternalLoads, Gravity, Interaction, Loads, Repulsion
 
 A = 5e-6
 SPHERE = wb.mesh.sphere(A, 2)
@@ -26,10 +26,14 @@ def test_model_and_state_refuse_what_cannot_run():
 
     with pytest.raises(ValueError, match="viscosity"):
         Flow(1.0, -1.0)
+    # an interaction is checked against the bodies when the model is made
     with pytest.raises(ValueError, match="densities must be"):
-        Gravity([SPHERE], [False], [-1.0])
+        Model([SPHERE], [False], interactions=[Gravity([-1.0])])
+    with pytest.raises(ValueError, match="densities must be 2 positive numbers"):
+        Model([SPHERE, SPHERE], [False, True], interactions=[Gravity([1050.0])])
     with pytest.raises(ValueError, match="body 1 is fixed"):
-        ExternalLoads([False, True], [[0, 0, 0], [1e-12, 0, 0]], np.zeros((2, 3)))
+        Model([SPHERE, SPHERE], [False, True],
+              interactions=[ExternalLoads([[0, 0, 0], [1e-12, 0, 0]], np.zeros((2, 3)))])
     with pytest.raises(ValueError, match=r"positions \(n, 3\) and orientations \(n, 4\)"):
         State(0.0, np.zeros((2, 3)), np.zeros((1, 4)))
     with pytest.raises(ValueError, match="not finite"):
@@ -41,7 +45,7 @@ def test_model_and_state_refuse_what_cannot_run():
 
 def passing_cells(scheme="heun", repulsion=None, dt_max=2e-3):
     """A free cell of 1.05 g/cc passing a held one in wall shear (thesis ch. 5 in small)."""
-    gravity = Gravity([SPHERE, SPHERE], [False, True], [1050.0, 1050.0], 1000.0, STANDARD_GRAVITY)
+    gravity = Gravity([1050.0, 1050.0], 1000.0, STANDARD_GRAVITY)
     interactions = [gravity] + ([repulsion] if repulsion else [])
     model = Model([SPHERE, SPHERE], [False, True], Flow(100.0, 1.2e-3), interactions=interactions,
                   solver=SolverOptions(contact_refinement=0.0), policy=StepPolicy(dt_max, 1e-5, 0.5e-6),
@@ -67,7 +71,7 @@ def test_a_frame_is_solved_at_its_own_positions_at_no_extra_cost(scheme, solves_
         state, frame = sim.step(state)
         frames.append(frame)
     assert len(calls) == 1 + 3 * solves_per_step
-    weight = model.interaction("gravity").force
+    weight = model.bound("gravity").force
     for previous, frame in zip(frames, frames[1:]):
         bodies = model.bodies(State(frame.time, frame.positions, frame.orientations))
         exact = wb.solve_mobility(bodies, 100.0, 1.2e-3, forces=weight, options=wb.SolverOptions(contact_refinement=0.0, density_order=model.solver.density_order))
@@ -98,7 +102,7 @@ def test_gaps_are_searched_once_per_state_and_retries_cost_no_solve():
     unit force's motion) to each evaluation, and the implicit force for any step length follows
     from those solves without another."""
     m = wb.mesh.sphere(A, 2)
-    gravity = Gravity([m], [False], [1050.0], 1000.0, STANDARD_GRAVITY)
+    gravity = Gravity([1050.0], 1000.0, STANDARD_GRAVITY)
     model = Model([m], [False], Flow(0.0, 1.2e-3), interactions=[gravity, Repulsion()],
                   solver=SolverOptions(contact_refinement=0.0), policy=StepPolicy(0.05, 1e-6, 1e-9))
     sim = Simulator(model)
@@ -145,11 +149,15 @@ class Odometer(Interaction):
 
     name = "odometer"
 
-    def __init__(self, n):
-        self.n = n
+    def bound(self, model, device=None):
+        return TravelledDistance(self, model, device)
+
+
+class TravelledDistance(BoundInteraction):
+    """The odometer on a model's bodies: one distance per body."""
 
     def state_columns(self):
-        return {"distance": ("m", (self.n,))}
+        return {"distance": ("m", (self.model.n_bodies,))}
 
     def initial_state(self, bodies):
         return {"distance": np.zeros(len(bodies))}
@@ -165,7 +173,7 @@ def test_an_interaction_s_own_state_is_stepped_framed_and_read_back(tmp_path):
     State starts from initial_state, advances after each accepted step, is written in every
     frame as <name>_<column> and is read back from the file exactly (what a resumed run needs)."""
     model, state = passing_cells("euler")
-    model = Model(model.meshes, model.fixed, model.flow, model.interactions + (Odometer(2),), model.solver,
+    model = Model(model.meshes, model.fixed, model.flow, model.interactions + (Odometer(),), model.solver,
                   model.policy, model.scheme)
     state = model.initial_state(state.positions)
     assert list(state.parts) == ["odometer"] and state.parts["odometer"]["distance"].tolist() == [0.0, 0.0]
@@ -207,7 +215,7 @@ def test_rigid_scenes_build_no_traction_or_elastic_operator(monkeypatch):
 
     monkeypatch.setattr(DiscreteOperator, "__init__", recording)
     m = wb.mesh.sphere(A, 2)
-    gravity = Gravity([m, m], [False, True], [1050.0, 1000.0], 1000.0, STANDARD_GRAVITY)
+    gravity = Gravity([1050.0, 1000.0], 1000.0, STANDARD_GRAVITY)
     model = Model([m, m], [False, True], Flow(100.0, 1.2e-3), interactions=[gravity, Repulsion()],
                   policy=StepPolicy(0.01, 1e-6, 1e-9))
     sim = Simulator(model)
@@ -219,17 +227,25 @@ def test_rigid_scenes_build_no_traction_or_elastic_operator(monkeypatch):
 
 def test_the_simulator_binds_device_state_to_its_own_copies():
     """Per-device state (compiled kernels, assembled elastic operators) lives in the simulator's
-    copies of the interactions (Interaction.bound): the model's stay as configured, so one model
-    serves several simulators."""
+    bindings of the interactions (Interaction.bound), which read the model's meshes: the
+    configurations are frozen, the model's own host view holds no device data and refuses to
+    step, so one model serves several simulators."""
+    import dataclasses
+
     from warpbem.elastic.deformable import Deformation
 
     cell = wb.mesh.sphere(5e-6, 2)
     flow = Flow(100.0, 1.2e-3, wall=False)
-    model = Model([cell], [False], flow, interactions=[Deformation([cell], [True], [4e3], [0.33], flow)])
+    model = Model([cell], [False], flow, interactions=[Deformation([True], [4e3], [0.33])])
     first, second = Simulator(model), Simulator(model)
-    configured = model.interaction("deformation")
-    assert configured.elastic == {}  # nothing assembled into the model's object
-    assert all(0 in sim.interactions[0].elastic for sim in (first, second))
-    assert first.interactions[0] is not configured and first.interactions[0] is not second.interactions[0]
+    host = model.bound("deformation")
+    assert host.elastic == {} and host.meshes is model.meshes  # nothing assembled for the model's view
+    assert all(0 in sim.interactions[0].elastic and sim.interactions[0].model is model for sim in (first, second))
+    assert first.interactions[0] is not host and first.interactions[0] is not second.interactions[0]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        model.interaction("deformation").shear_modulus = (1e3,)
     state = model.initial_state([[0.0, 0.0, 0.0]])
+    with pytest.raises(RuntimeError, match="bound without a device"):
+        host.advance_shape(state.parts["deformation"], model.bodies(state), Loads.zero(1),
+                           state.orientations, 1e-4, [])
     assert np.array_equal(first.step(state)[0].positions, second.step(state)[0].positions)

@@ -8,6 +8,7 @@ from warpbem.surfaces import quad9
 from warpbem.surfaces.gaps import WALL, GapFinder
 from warpbem.surfaces.placement import signed_distance
 from warpbem.dynamics.implicit import ImplicitSystem
+from warpbem.dynamics.model import Model
 from warpbem.forces.repulsion import Repulsion
 
 
@@ -127,7 +128,7 @@ def test_contacts_carry_the_points_where_their_forces_act():
 
     a = 5e-6
     m = wb.mesh.sphere(a, 4)
-    rep = Repulsion()
+    rep = Repulsion().bound(Model([m, m], [False, False]))  # it derives nothing from the model
     low = a + 225e-9 + 10e-9
     bodies = [wb.Body(m, position=(0.0, 0.0, low)), wb.Body(m, position=(2 * a + 360e-9, 0.0, low))]
     contacts = Contacts(bodies, np.array([a, a]), True, GapFinder())

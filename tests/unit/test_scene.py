@@ -268,7 +268,7 @@ def test_shape_dynamics_scenes_set_the_thesis_cells(name, vis, kappas, wall):
     for s in sweep_scenes(name):
         (cell,) = s.bodies
         deformation = s.model.interaction("deformation")
-        assert cell.deformable and not cell.fixed and cell.poisson_ratio == 0.33 and deformation.relaxation
+        assert cell.deformable and not cell.fixed and cell.poisson_ratio == 0.33 and deformation.options.relaxation
         assert s.model.flow.viscosity == 1e-3 and s.model.flow.wall == wall
         extent = cell.mesh.nodes.max(axis=0) - cell.mesh.nodes.min(axis=0)
         assert extent[0] == pytest.approx(10e-6)

@@ -30,15 +30,20 @@ TABLE_4_1 = dict(receptor_density=20e12, spring_constant=5e-4, equilibrium_lengt
 REST_GAP = 236e-9  # m: tips 61 nm above the wall, where gravity and eq. 3.1 balance
 
 
+def bound_on_one_cell(options):
+    """The bonds of ``options`` on one free cell of MESH, bound on the CPU."""
+    bonds = Adhesion(options)
+    return bonds.bound(Model([MESH], [False], interactions=[bonds]), "cpu")
+
+
 def test_mean_bond_lifetime_under_constant_force_is_one_over_the_bell_rate():
     """20 000 bonds at 40 pN (sigma = 1 mN/m stretched 40 nm), r0 = 1 A, k_r0 = 2 /s: k_r = 2 exp(r0 F
     / kT) = 5.09 /s. Each step breaks a bond with 1 - exp(-k_r dt), so lifetimes are geometric
     with mean dt / (1 - exp(-k_r dt)) = 1 / k_r + dt / 2 + O(dt^2): the sample mean matches it
     within 4 standard errors (0.7 % each), and its standard deviation the mean (exponential)."""
     n, dt, force = 20000, 1e-3, 40e-12
-    adh = Adhesion([MESH], [False], BondOptions(**{**TABLE_4_1, "spring_constant": 1e-3, "reactive_compliance": 1e-10,
-                                       "off_rate": 2.0}, max_bonds=n))
-    adh.prepare("cpu")
+    adh = bound_on_one_cell(BondOptions(**{**TABLE_4_1, "spring_constant": 1e-3, "reactive_compliance": 1e-10,
+                                           "off_rate": 2.0}, max_bonds=n))
     wp, k = adh.wp, adh.k
     rate = 2.0 * np.exp(1e-10 * force / (BOLTZMANN * 310.0))
     assert rate == pytest.approx(5.09, rel=1e-3)
@@ -65,7 +70,7 @@ def test_bound_fraction_at_zero_force_is_the_two_state_equilibrium():
     a step), the bound fraction of the chain settles at b = p_f / (p_f + p_r (1 - p_f)), which
     tends to k_f / (k_f + k_r) as dt -> 0. Here k_f = k_r = 50 /s, dt = 2 ms: b = 0.5250 (the
     continuous limit 0.5 is over 6 standard errors away)."""
-    adh = Adhesion([MESH], [False], BondOptions(**{**TABLE_4_1, "spring_constant": 1e-12, "on_rate": 50.0, "off_rate": 50.0}, max_bonds=2000))
+    adh = bound_on_one_cell(BondOptions(**{**TABLE_4_1, "spring_constant": 1e-12, "on_rate": 50.0, "off_rate": 50.0}, max_bonds=2000))
     body = Body(MESH, position=(0, 0, A + REST_GAP))
     contacts = Contacts([body], [MESH.size()], True, GapFinder())
     dt = 2e-3
@@ -85,8 +90,8 @@ def test_bound_fraction_at_zero_force_is_the_two_state_equilibrium():
 
 
 def rolling_model(seed=0, reuse=2e-9, **changes):
-    gravity = Gravity([MESH], [False], [1050.0], 1000.0, STANDARD_GRAVITY)
-    bonds = Adhesion([MESH], [False], BondOptions(**{**TABLE_4_1, **changes}, seed=seed), shear_modulus=[4e3])
+    gravity = Gravity([1050.0], 1000.0, STANDARD_GRAVITY)
+    bonds = Adhesion(BondOptions(**{**TABLE_4_1, **changes}, seed=seed), shear_modulus=[4e3])
     return Model([MESH], [False], Flow(100.0, 1e-3), interactions=[gravity, Repulsion(), bonds],
                  solver=SolverOptions(reuse_tolerance=reuse), policy=StepPolicy(5e-4, 1e-7, 1e-9), scheme="euler")
 
@@ -105,7 +110,7 @@ def test_a_cell_without_bonds_moves_at_the_mobility_solver_velocity():
             state, frame = sim.step(state)
             assert frame.parts["bond"]["count"][0] == 0 and frame.dt == model.policy.dt_max
             bodies = model.bodies(State(frame.time, frame.positions, frame.orientations))
-            exact = wb.solve_mobility(bodies, 100.0, 1e-3, forces=model.interaction("gravity").force,
+            exact = wb.solve_mobility(bodies, 100.0, 1e-3, forces=model.bound("gravity").force,
                                       options=wb.SolverOptions(density_order=model.solver.density_order))
             np.testing.assert_allclose(frame.velocity, exact.velocity, rtol=1e-7, atol=1e-12)
             np.testing.assert_allclose(frame.angular_velocity, exact.angular_velocity, rtol=1e-7,
@@ -230,7 +235,7 @@ def test_a_free_cell_binds_to_ligands_on_an_adherent_cell():
     would compress them, and the loads compared would be round-off, 1e-25 N)."""
     gap = 175e-9 + 60e-9  # tips 60 nm from the adherent surface
     meshes = [MESH, MESH]
-    bonds = Adhesion(meshes, [False, True], BondOptions(**{**TABLE_4_1, "on_rate": 2e3}, seed=4), ligand_bodies=[False, True])
+    bonds = Adhesion(BondOptions(**{**TABLE_4_1, "on_rate": 2e3}, seed=4), ligand_bodies=[False, True])
     model = Model(meshes, [False, True], Flow(100.0, 1e-3), interactions=[bonds],
                   solver=SolverOptions(), policy=StepPolicy(2e-4, 1e-7, 1e-9), scheme="euler")
     sim = Simulator(model)
@@ -241,7 +246,7 @@ def test_a_free_cell_binds_to_ligands_on_an_adherent_cell():
     rows = np.flatnonzero(part["receptor"] >= 0)
     assert len(rows) > 0 and np.all(part["partner"][rows] == 1)
     body = model.bodies(state)[0]
-    tips = body.position + bonds.tips[part["receptor"][rows].astype(int)] @ body.rotation().T
+    tips = body.position + model.bound("bond").tips[part["receptor"][rows].astype(int)] @ body.rotation().T
     new = rows[part["birth"][rows] == state.time]  # formed at the last step's end: at rest length
     assert len(new) > 0
     np.testing.assert_allclose(np.linalg.norm(tips[np.isin(rows, new)] - part["anchor"][new], axis=1), 30e-9,

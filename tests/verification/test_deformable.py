@@ -46,7 +46,7 @@ mesh = { shape = "sphere", radius = 5.0e-6, subdivisions = 2 }
 def cell_in_shear(k, ca, dt, **options):
     mesh = wb.mesh.sphere(A, k)
     flow = Flow(100.0, 1e-3, False)
-    deformation = Deformation([mesh], [True], [1e-3 * 100.0 / ca], [0.33], flow, DeformationOptions(**options))
+    deformation = Deformation([True], [1e-3 * 100.0 / ca], [0.33], DeformationOptions(**options))
     model = Model([mesh], [False], flow, interactions=[deformation], policy=StepPolicy(dt, 1e-7, 1e-9),
                   scheme="euler")
     return mesh, model, Simulator(model)
@@ -76,7 +76,7 @@ def test_a_relaxing_cell_in_shear_settles_on_roscoes_linear_steady_state():
     measured; the quasi-static model has none)."""
     ca, dt = 0.05, 5e-5
     _, model, sim = cell_in_shear(4, ca, dt)
-    tau = model.interactions[0].relaxation_time(0)
+    tau = sim.interactions[0].relaxation_time(0)
     assert tau == pytest.approx(1.5e-3 / (1e-3 * 100.0 / ca))
     state = model.initial_state([[0.0, 0.0, 0.0]])
     state, frame = sim.step(state)
@@ -100,7 +100,7 @@ def test_a_tank_treading_cell_lifts_off_the_wall_when_its_surface_moves_with_the
         mesh = wb.mesh.sphere(A, 4)
         flow = Flow(100.0, 1e-3, True)
         model = Model([mesh], [False], flow, policy=StepPolicy(1e-4, 1e-7, 1e-9), scheme="euler",
-                      interactions=[Deformation([mesh], [True], [0.5], [0.33], flow, DeformationOptions(surface_velocity=moving))])
+                      interactions=[Deformation([True], [0.5], [0.33], DeformationOptions(surface_velocity=moving))])
         sim = Simulator(model)
         state = model.initial_state([[0.0, 0.0, 7.75e-6]])
         for _ in range(40):
@@ -119,10 +119,11 @@ def test_a_cell_pressed_by_its_neighbours_repulsion_flattens_where_they_touch():
     mesh, not Hertz, sets the contact's resolution."""
     mesh = wb.mesh.sphere(A, 4)
     flow = Flow(0.0, 1.2e-3, False)
-    deformation = Deformation([mesh, mesh], [True, True], [4e3, 4e3], [0.33, 0.33], flow, DeformationOptions(relaxation=False))
+    deformation = Deformation([True, True], [4e3, 4e3], [0.33, 0.33], DeformationOptions(relaxation=False))
     model = Model([mesh, mesh], [False, False], flow, interactions=[Repulsion(), deformation],
                   policy=StepPolicy(1e-6, 1e-9, 1e-9), scheme="euler")
     sim = Simulator(model)
+    deformation = sim.interactions[1]  # bound on the simulator's device
     state = model.initial_state([[0.0, 0.0, 0.0], [2 * A + 358e-9, 0.0, 0.0]])
     loads, (a, b) = sim.evaluate(state).step_loads(1e-6)
     at_state = Repulsion().force(8e-9)
@@ -148,7 +149,7 @@ def test_an_update_interval_solves_the_target_every_mth_step_and_relaxes_in_betw
     for interval in (1, 3):
         _, model, sim = cell_in_shear(2, 0.2, 1e-4, update_interval=interval)
         calls = []
-        deformation = sim.interactions[0]  # the copy the simulator steps with (Interaction.bound)
+        deformation = sim.interactions[0]  # the binding the simulator steps with (Interaction.bound)
         solve = deformation._target
         deformation._target = lambda *a: calls.append(1) or solve(*a)
         state = model.initial_state([[0.0, 0.0, 0.0]])
@@ -226,8 +227,8 @@ def test_a_folding_surface_stops_the_run_and_a_coarse_step_warns():
     a fifth of the way it does not fold. A step that turns the cell by more than 0.1 rad (Omega
     dt = 0.125 in shear at 100 1/s, dt = 2.5 ms) warns that its shape lags the material."""
     mesh = wb.mesh.sphere(A, 4)
-    deformation = Deformation([mesh], [True], [1.0], [0.33], Flow(100.0, 1e-3, False))
-    deformation.prepare("cpu")
+    configured = Deformation([True], [1.0], [0.33])
+    deformation = configured.bound(Model([mesh], [False], Flow(100.0, 1e-3, False), interactions=[configured]), "cpu")
     element = mesh.elements[0]
     u = np.zeros_like(mesh.nodes)
     for share, folds in ((0.2, False), (0.5, True)):
@@ -256,8 +257,8 @@ def test_a_cell_pressed_on_the_wall_holds_its_contact_force_while_it_flattens():
     mesh = wb.mesh.sphere(A, 4)
     flow = Flow(0.0, 1e-3, True)
     model = Model([mesh], [False], flow, interactions=[
-        Repulsion(), ExternalLoads([False], [[0.0, 0.0, -force]], [[0.0, 0.0, 0.0]]),
-        Deformation([mesh], [True], [4e3], [0.33], flow)], policy=StepPolicy(2e-5, 1e-7, 1e-9), scheme="euler")
+        Repulsion(), ExternalLoads([[0.0, 0.0, -force]], [[0.0, 0.0, 0.0]]),
+        Deformation([True], [4e3], [0.33])], policy=StepPolicy(2e-5, 1e-7, 1e-9), scheme="euler")
     sim = Simulator(model)
     layers = np.log(1 + 1e-12 * 2e9 / force) / 2e9  # eq. 3.1 (F0 = 1e-12 J, 2 /nm) at 350 pN
     state = model.initial_state([[0.0, 0.0, A + 225e-9 + layers]])
@@ -284,8 +285,9 @@ def test_the_gaps_leave_out_the_cells_own_contact_loads_with_the_fluids_answer_t
 
     mesh = wb.mesh.sphere(A, 4)
     flow = Flow(100.0, 1e-3, True)
-    deformation = Deformation([mesh], [True], [500.0], [0.33], flow, DeformationOptions(relaxation=False))
-    model = Model([mesh], [False], flow, interactions=[deformation])
+    configured = Deformation([True], [500.0], [0.33], DeformationOptions(relaxation=False))
+    model = Model([mesh], [False], flow, interactions=[configured])
+    deformation = configured.bound(model, "cpu")
     state = model.initial_state([[0.0, 0.0, A + 240e-9]])
     body = model.bodies(state)[0]
     point = np.array([0.3e-6, 0.0, 240e-9])

@@ -32,7 +32,8 @@ from .test_adhesion import MESH, REST_GAP, TABLE_4_1, A  # the rolling cell of t
 
 def test_receptors_ride_on_the_displaced_surface():
     mesh = wb.mesh.sphere(5e-6, 4)
-    adhesion = Adhesion([mesh], [False], BondOptions(**TABLE_4_1))
+    bonds = Adhesion(BondOptions(**TABLE_4_1))
+    adhesion = Model([mesh], [False], interactions=[bonds]).bound("bond")  # the host view: tips, no device
     eps = np.array([[0.01, 0.004, 0.0], [0.004, -0.006, 0.002], [0.0, 0.002, -0.004]])
     deformed = Body(Mesh(mesh.nodes + mesh.nodes @ eps.T, mesh.elements), position=(0.0, 0.0, 6e-6))
     moved = adhesion.tips_at([deformed]) - adhesion.tips
@@ -42,10 +43,10 @@ def test_receptors_ride_on_the_displaced_surface():
 
 
 def rolling_model(shear_modulus, deformable):
-    gravity = Gravity([MESH], [False], [1050.0], 1000.0, STANDARD_GRAVITY)
-    bonds = Adhesion([MESH], [False], BondOptions(**TABLE_4_1, seed=3), shear_modulus=[shear_modulus])
+    gravity = Gravity([1050.0], 1000.0, STANDARD_GRAVITY)
+    bonds = Adhesion(BondOptions(**TABLE_4_1, seed=3), shear_modulus=[shear_modulus])
     flow = Flow(100.0, 1e-3)
-    shape = [Deformation([MESH], [True], [shear_modulus], [0.33], flow)] if deformable else []
+    shape = [Deformation([True], [shear_modulus], [0.33])] if deformable else []
     return Model([MESH], [False], flow, interactions=[gravity, Repulsion(), bonds, *shape],
                  solver=SolverOptions(reuse_tolerance=2e-9), policy=StepPolicy(2e-5, 1e-7, 1e-9), scheme="euler")
 
@@ -93,7 +94,7 @@ def test_a_stiff_deformable_cell_is_captured_as_the_rigid_one_and_its_bonds_load
     body = sim.model.bodies(state, contact=True)[0]  # the tips ride on the shape the gaps see
     rows = np.flatnonzero(state.parts["bond"]["receptor"] >= 0)
     receptors = state.parts["bond"]["receptor"][rows].astype(int)
-    world_tips = body.position + sim.model.interaction("bond").tips_at([body])[receptors] @ body.rotation().T
+    world_tips = body.position + sim.model.bound("bond").tips_at([body])[receptors] @ body.rotation().T
     world_tips[:, 2] += state.parts["bond"]["offset"][rows]  # the Hertz patch's lowering of the tip
     for _, _, point, _ in on_tips:
         assert np.linalg.norm(world_tips - point, axis=1).min() < 1e-15

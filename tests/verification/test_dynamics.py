@@ -85,10 +85,10 @@ def test_heavy_cell_settles_at_brenners_speed_and_the_step_shrinks():
 
     a, mu = 5e-6, 1e-3
     m = wb.mesh.sphere(a, 4)
-    gravity = Gravity([m], [False], [1050.0], 1000.0, 9.81)
+    gravity = Gravity([1050.0], 1000.0, 9.81)
     sim = Simulator(Model([m], [False], Flow(0.0, mu), interactions=[gravity],
                           policy=StepPolicy(dt_max=0.5, dt_min=0.05, contact_gap=1.5e-6)))
-    weight = gravity.force[0, 2]
+    weight = sim.model.bound("gravity").force[0, 2]
     assert np.isclose(weight, -50 * 9.81 * m.volume())
     state = State(0.0, np.array([[0.0, 0.0, 7.0e-6]]), np.array([[1.0, 0, 0, 0]]))
     steps = []
@@ -112,7 +112,7 @@ def test_a_step_that_would_cross_the_wall_is_retried_shorter():
     never touches. Too short a dt_min to ever allow that is an error that says so."""
     a = 5e-6
     m = wb.mesh.sphere(a, 2)
-    heavy = Gravity([m], [False], [1.0e5], 1000.0, 9.81)
+    heavy = Gravity([1.0e5], 1000.0, 9.81)
     sim = Simulator(Model([m], [False], Flow(0.0, 1e-3), interactions=[heavy],
                           policy=StepPolicy(dt_max=5.0, dt_min=1e-3, contact_gap=1e-9)))
     state = State(0.0, np.array([[0.0, 0.0, 1.4 * a]]), np.array([[1.0, 0, 0, 0]]))

@@ -24,7 +24,7 @@ def test_dense_cell_comes_to_rest_on_the_wall_at_the_balance_separation():
     monotonically and never goes below the balance."""
     m = wb.mesh.sphere(A, 2)
     rep = Repulsion()
-    gravity = Gravity([m], [False], [1050.0], 1000.0, STANDARD_GRAVITY)
+    gravity = Gravity([1050.0], 1000.0, STANDARD_GRAVITY)
     sim = Simulator(Model([m], [False], Flow(0.0, 1.2e-3), interactions=[gravity, rep],
                           solver=SolverOptions(contact_refinement=0.0),
                           policy=StepPolicy(dt_max=0.05, dt_min=1e-6, contact_gap=1e-9)))
@@ -59,7 +59,7 @@ def test_pushed_sphere_stops_against_a_fixed_sphere():
     push = 1e-11
     direction = np.array([1.0, 0.0, 0.0])
     sim = Simulator(Model([m, m], [False, True], Flow(0.0, 1.2e-3, wall=False),
-                          interactions=[ExternalLoads([False, True], [-push * direction, [0, 0, 0]], np.zeros((2, 3))),
+                          interactions=[ExternalLoads([-push * direction, [0, 0, 0]], np.zeros((2, 3))),
                                         rep],
                           solver=SolverOptions(contact_refinement=0.0),
                           policy=StepPolicy(dt_max=0.005, dt_min=1e-6, contact_gap=1e-9)))

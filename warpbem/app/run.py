@@ -25,7 +25,7 @@ RESUMABLE_KEYS = ("time.end", "time.frame_every")
 def read_state(f, model, row: int) -> State:
     """The state of frame ``row`` of an open run file (``model``: the run's)."""
     parts = {}
-    for x in model.interactions:
+    for x in model.bound_interactions:
         if x.state_columns():
             parts[x.name] = {name: f[f"{x.name}_{name}"][row] for name in x.state_columns()}
     return State(float(f["time"][row]), f["position"][row], f["orientation"][row], int(f["steps"][row]), parts)

@@ -250,14 +250,12 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
         bodies += _array(f"arrays.{i}", spec, folder)
     if not bodies:
         raise SceneError("bodies: expected at least one [[bodies]] or [[arrays]] entry")
-    meshes_, fixed = [b.mesh for b in bodies], [b.fixed for b in bodies]
     # model no more than the scene needs: only the interactions switched on are built
     interactions = []
     if physics.gravity:
-        interactions.append(Gravity(meshes_, fixed, [b.density for b in bodies], physics.fluid_density,
-                                    STANDARD_GRAVITY))
+        interactions.append(Gravity([b.density for b in bodies], physics.fluid_density, STANDARD_GRAVITY))
     if any(any(b.force) or any(b.torque) for b in bodies):
-        interactions.append(ExternalLoads(fixed, [b.force for b in bodies], [b.torque for b in bodies]))
+        interactions.append(ExternalLoads([b.force for b in bodies], [b.torque for b in bodies]))
     if physics.repulsion:
         interactions.append(repulsion)
     if physics.adhesion:
@@ -266,10 +264,13 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
     solver_options = _options(SolverOptions, {"reuse_tolerance": ADHESION_REUSE_TOLERANCE, **solver}
                               if physics.adhesion else solver, "solver").resolved(time_stepping=True)
     if any(b.deformable for b in bodies):
-        interactions.append(Deformation(meshes_, [b.deformable for b in bodies], [b.shear_modulus for b in bodies],
-                                        [b.poisson_ratio for b in bodies], flow, deformation, solver=solver_options))
-    model = Model(meshes=meshes_, fixed=fixed, names=[b.name for b in bodies], interactions=interactions, flow=flow,
-                  solver=solver_options, policy=policy, scheme=run.scheme)
+        interactions.append(Deformation([b.deformable for b in bodies], [b.shear_modulus for b in bodies],
+                                        [b.poisson_ratio for b in bodies], deformation))
+    try:
+        model = Model(meshes=[b.mesh for b in bodies], fixed=[b.fixed for b in bodies], names=[b.name for b in bodies],
+                      interactions=interactions, flow=flow, solver=solver_options, policy=policy, scheme=run.scheme)
+    except ValueError as err:  # an interaction that does not fit the bodies (Interaction.check)
+        raise SceneError(f"bodies: {err}") from err
     return Scene(raw=copy.deepcopy(table), bodies=tuple(bodies), model=model, end=run.end,
                  frame_every=run.frame_every, frame_interval=run.frame_interval, sweep=sweep)
 
@@ -314,12 +315,8 @@ def _adhesion(table, bodies, repulsion: Repulsion, dt_min: float, wall: bool) ->
     if not any(b.adhesive and not b.fixed for b in bodies):
         raise SceneError("bodies: adhesion is on but no free body is adhesive (bodies.N.adhesive)")
     options = _options(BondOptions, table, "adhesion").resolved(repulsion.cell_roughness, repulsion.wall_roughness)
-    try:
-        adhesion = Adhesion([b.mesh for b in bodies], [b.fixed for b in bodies], options,
-                            adhesive=[b.adhesive for b in bodies], shear_modulus=[b.shear_modulus for b in bodies],
-                            poisson_ratio=[b.poisson_ratio for b in bodies], ligand_bodies=[b.ligands for b in bodies])
-    except ValueError as err:
-        raise SceneError(f"adhesion: {err}") from err
+    adhesion = Adhesion(options, adhesive=[b.adhesive for b in bodies], shear_modulus=[b.shear_modulus for b in bodies],
+                        poisson_ratio=[b.poisson_ratio for b in bodies], ligand_bodies=[b.ligands for b in bodies])
     # the step is bounded by the kinetics, k dt <= kinetics_fraction; dt_min must allow it
     for name, rate in (("on_rate", adhesion.fastest_formation), ("off_rate", adhesion.off_rate)):
         if rate * dt_min > adhesion.kinetics_fraction:

@@ -41,7 +41,7 @@ def frame_columns(model) -> dict[str, Column]:
         "gmres_residual": Column("1", (), "largest relative residual of the solves at this state"),
         "closest_gap": Column("m", (), "exact smallest surface gap of a free body to another body or the wall"),
     }
-    for x in model.interactions:
+    for x in model.bound_interactions:
         columns[f"{x.name}_force"] = Column("N", (n, 3), f"load of the {x.name} interaction on each body, {AT_STATE}")
         columns[f"{x.name}_torque"] = Column("N m", (n, 3), f"its torque about each reference point, {AT_STATE}")
         for name, (unit, shape) in x.state_columns().items():

@@ -1,6 +1,8 @@
 """The static part of a scene (DESIGN.md §3): meshes, which bodies are fixed, the flow, the
-interactions that are switched on, solver and stepping options. Validated when made and
-frozen; the ``State`` holds what changes."""
+interactions that are switched on, solver and stepping options. Validated when made (each
+interaction checked against the bodies) and frozen; the ``State`` holds what changes. The model
+is the one source of the meshes, fixed flags and flow: interactions are configurations that
+read them when bound to it (``forces/interaction.py``)."""
 
 from __future__ import annotations
 
@@ -10,7 +12,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..forces.interaction import Interaction
+from ..forces.interaction import BoundInteraction, Interaction
 from ..hydro.frozen import FrozenArraySolver
 from ..hydro.mobility import MobilitySolver
 from ..hydro.options import Flow, SolverOptions
@@ -77,8 +79,9 @@ class StepPolicy:
 class Model:
     """Bodies (``meshes`` in metres about their reference points, ``fixed`` flags, ``names``),
     the ``flow``, the ``interactions`` switched on (``forces``: Gravity, ExternalLoads,
-    Repulsion, ...), the solver options (their context defaults resolved for time stepping,
-    ``SolverOptions.resolved``), the step policy and the scheme ("euler" or "heun")."""
+    Repulsion, ...; configurations, each checked against the bodies here), the solver options
+    (their context defaults resolved for time stepping, ``SolverOptions.resolved``), the step
+    policy and the scheme ("euler" or "heun")."""
 
     meshes: tuple
     fixed: tuple
@@ -110,6 +113,8 @@ class Model:
         for name, value in (("meshes", meshes), ("fixed", fixed), ("names", names), ("interactions", interactions),
                             ("solver", self.solver.resolved(time_stepping=True))):
             object.__setattr__(self, name, value)
+        for x in interactions:  # e.g. one density per body, ligands on fixed bodies only
+            x.check(self)
 
     @property
     def n_bodies(self) -> int:
@@ -131,8 +136,20 @@ class Model:
         return np.array([outer_radius(m) for m in self.meshes])
 
     def interaction(self, name: str) -> Interaction | None:
-        """The interaction called ``name``, or None if it is not switched on."""
+        """The interaction called ``name`` (its configuration), or None if it is not switched on."""
         return next((x for x in self.interactions if x.name == name), None)
+
+    @cached_property
+    def bound_interactions(self) -> tuple:
+        """Each interaction bound to this model without a device (``Interaction.bound``): the
+        host view of what it derives from the meshes, fixed flags and flow (receptor tips, the
+        weights, the state's layout), which this model's own methods and the frames read. A
+        ``Simulator`` steps with its own binding, with device data (forces/interaction.py)."""
+        return tuple(x.bound(self) for x in self.interactions)
+
+    def bound(self, name: str) -> BoundInteraction | None:
+        """The host view (``bound_interactions``) of the interaction called ``name``, or None."""
+        return next((x for x in self.bound_interactions if x.name == name), None)
 
     @property
     def implicit(self) -> tuple:
@@ -145,7 +162,7 @@ class Model:
         if len(state.positions) != self.n_bodies:
             raise ValueError(f"the state has {len(state.positions)} bodies, the model {self.n_bodies}")
         meshes, slip = list(self.meshes), [None] * self.n_bodies
-        for x in self.interactions:  # deformable cells: the shapes of this state, their surfaces' motion
+        for x in self.bound_interactions:  # deformable cells: the shapes of this state, their surfaces' motion
             if x.shapes_bodies and x.name in state.parts:
                 meshes = x.body_meshes(state.parts[x.name], meshes, contact)
                 slip = x.surface_velocities(state.parts[x.name], slip)
@@ -164,5 +181,5 @@ class Model:
             orientations = np.tile([1.0, 0.0, 0.0, 0.0], (len(positions), 1))
         start = State(time, positions, orientations)
         bodies = self.bodies(start)
-        parts = {x.name: x.initial_state(bodies) for x in self.interactions if x.state_columns()}
+        parts = {x.name: x.initial_state(bodies) for x in self.bound_interactions if x.state_columns()}
         return State(time, positions, orientations, parts=parts)

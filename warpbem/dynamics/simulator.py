@@ -113,7 +113,7 @@ class Evaluation:
             residual = max(residual, self.hydro.basis.residual)
         s = self.state
         derived = {}
-        for interaction in self.model.interactions:
+        for interaction in self.model.bound_interactions:
             if interaction.name in s.parts:
                 derived.update(interaction.derived_values(s.parts[interaction.name]))
         return Frame(s.time, dt, s.steps, s.positions, s.orientations, velocity, angular_velocity, force, torque,
@@ -123,9 +123,11 @@ class Evaluation:
 class Simulator:
     """Steps a ``Model`` on a Warp device. ``step(state)`` returns the next state and its frame.
 
-    The simulator keeps the mobility solver (its kept blocks of fixed bodies and warm start) and
-    the evaluation of the state it returned last, which the next step starts from: a cache of
-    a pure function of that state, never a way to pass results.
+    The simulator keeps the model's interactions bound on its device (``Interaction.bound``:
+    what they derive from the model, with their kernels and device arrays), the mobility solver
+    (its kept blocks of fixed bodies and warm start) and the evaluation of the state it returned
+    last, which the next step starts from: a cache of a pure function of that state, never a way
+    to pass results.
     """
 
     def __init__(self, model: Model, device="cpu"):
@@ -135,8 +137,8 @@ class Simulator:
         self.near_far_split = model.solver.near_far_report(fixed_cells)  # on or off, and why
         self.hydro = HydrodynamicSolves(model, self.mobility)
         self.gaps = GapFinder(device)
-        # the interactions with their device data, bound here: the model's own stay untouched
-        self.interactions = tuple(x.bound(device) for x in model.interactions)
+        # the interactions bound to the model with their device data on this device
+        self.interactions = tuple(x.bound(model, device) for x in model.interactions)
         self.implicit = tuple(x for x in self.interactions if x.implicit)
         self._latest: Evaluation | None = None
 

@@ -71,8 +71,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..forces import hertz
-from ..forces.interaction import Interaction
-from ..hydro.options import SolverOptions
+from ..forces.interaction import BoundInteraction, Interaction
 from ..options import option, validate
 from ..hydro.traction import solve_traction
 from ..surfaces.body import rotation_matrix
@@ -131,49 +130,67 @@ class DeformationError(RuntimeError):
     """A deformable cell's displacement outside what linear elasticity on its mesh can mean."""
 
 
+@dataclass(frozen=True)
 class Deformation(Interaction):
-    """Linear elastic deformation of the ``deformable`` bodies (module docstring): per body
-    ``shear_modulus`` (Pa) and ``poisson_ratio``; ``flow`` the model's ``Flow``; ``options``
-    the ``DeformationOptions``; ``solver``: the model's ``SolverOptions``, which the traction and
-    the interior elastic problem take (quadrature, contact refinement, GMRES, operator mode)."""
+    """Linear elastic deformation of the ``deformable`` bodies (module docstring; one flag per
+    body of the model): per body ``shear_modulus`` (Pa) and ``poisson_ratio``; ``options`` the
+    ``DeformationOptions``. The relaxation time takes the model's flow, the traction and the
+    interior elastic problem its ``SolverOptions`` (quadrature, contact refinement, GMRES,
+    operator mode)."""
 
     name = "deformation"
     shapes_bodies = True
 
-    def __init__(self, meshes, deformable, shear_modulus, poisson_ratio, flow,
-                 options: DeformationOptions = DeformationOptions(), *, solver: SolverOptions | None = None):
-        self.meshes = list(meshes)
-        self.deformable = np.asarray(deformable, dtype=bool)
-        if len(self.deformable) != len(self.meshes) or not self.deformable.any():
+    deformable: tuple
+    shear_modulus: tuple
+    poisson_ratio: tuple
+    options: DeformationOptions = DeformationOptions()
+
+    def __post_init__(self):
+        object.__setattr__(self, "deformable", tuple(bool(d) for d in self.deformable))
+        object.__setattr__(self, "shear_modulus", tuple(self.shear_modulus))
+        object.__setattr__(self, "poisson_ratio", tuple(self.poisson_ratio))
+
+    def check(self, model):
+        if len(self.deformable) != model.n_bodies or not any(self.deformable):
             raise ValueError("deformable must flag each body, at least one of them")
         for i in np.flatnonzero(self.deformable):
-            check_material(shear_modulus[i], poisson_ratio[i])
-        self.flow = flow
-        self.options = options
+            check_material(self.shear_modulus[i], self.poisson_ratio[i])
+
+    def bound(self, model, device=None) -> "BoundDeformation":
+        return BoundDeformation(self, model, device)
+
+
+class BoundDeformation(BoundInteraction):
+    """A ``Deformation`` on a model's bodies (``meshes``: the model's reference meshes, body
+    frame) and, on a device, what each deformable cell's steps need, assembled once in its body
+    frame (it depends on the reference shape only): its interior elastic problem, nodal weights,
+    reference node normals and element size."""
+
+    def __init__(self, interaction: Deformation, model, device=None):
+        super().__init__(interaction, model, device)
+        self.meshes = model.meshes
+        self.deformable = np.array(interaction.deformable, dtype=bool)
+        self.shear_modulus, self.poisson_ratio = list(interaction.shear_modulus), list(interaction.poisson_ratio)
+        options = interaction.options
         self.relaxation, self.update_interval = options.relaxation, options.update_interval
         self.surface_velocity = options.surface_velocity
-        self.solver = solver or SolverOptions()
-        self.shear_modulus, self.poisson_ratio = list(shear_modulus), list(poisson_ratio)
         self.max_nodes = max(len(m.nodes) for m in self.meshes)
         self.radii = [m.equivalent_radius() for m in self.meshes]  # m: the Hertz curvatures, the amplitude scale
-        self.device = "cpu"
+        self._warned = set()  # (body, kind) already reported, once per binding
         self.elastic, self.weights, self.normals, self.element_size = {}, {}, {}, {}
-        self._warned = set()  # (body, kind) already reported
-
-    def relaxation_time(self, i: int) -> float:
-        """tau = 3 mu / (2 G) (s) of body i (module docstring); 0 for the quasi-static model."""
-        return 1.5 * self.flow.viscosity / self.shear_modulus[i] if self.relaxation else 0.0
-
-    def prepare(self, device) -> None:
-        self.device = device
-        self._warned = set()  # each simulator's copy warns once per body and kind (Interaction.bound)
-        # assembled once per cell, in its body frame (they depend on the reference shape only)
+        if device is None:
+            return  # the model's host view: no elastic problems (forces/interaction.py)
         self.elastic = {i: InteriorElasticity(self.meshes[i], self.shear_modulus[i], self.poisson_ratio[i], device,
-                                              options=self.solver)
+                                              options=model.solver)
                         for i in np.flatnonzero(self.deformable)}
         self.weights = {i: nodal_weights(self.meshes[i]) for i in self.elastic}
         self.normals = {i: self._node_normals(self.meshes[i].nodes, i) for i in self.elastic}
         self.element_size = {i: float(np.sqrt(self.meshes[i].element_areas().mean())) for i in self.elastic}
+
+    def relaxation_time(self, i: int) -> float:
+        """tau = 3 mu / (2 G) (s) of body i (module docstring); 0 for the quasi-static model."""
+        return 1.5 * self.model.flow.viscosity / self.shear_modulus[i] if self.relaxation else 0.0
 
     def state_columns(self):
         n = len(self.meshes)
@@ -222,8 +239,7 @@ class Deformation(Interaction):
         return out
 
     def advance_shape(self, part, start_bodies, start_loads, end_orientations, dt, point_loads):
-        if not self.elastic:
-            self.prepare(self.device)
+        self._stepping()
         target, contact_target = part["target_displacement"], part["contact_target"]
         age = part["steps_since_solve"]
         if age[0] >= self.update_interval:
@@ -303,9 +319,10 @@ class Deformation(Interaction):
                 self._warn_once(body, "patch", f"body {body}: its contact patch (Hertz radius {radius:.2g} m) is"
                                 " narrower than its elements: the mesh, not Hertz, sets the contact's flattening")
         loaded = {body for body, _, _, _ in spread}
-        traction = solve_traction(start_bodies, self.flow.shear_rate, self.flow.viscosity, self.flow.wall,
+        flow = self.model.flow
+        traction = solve_traction(start_bodies, flow.shear_rate, flow.viscosity, flow.wall,
                                   force, torque, self.device, point_loads=spread,
-                                  load_response=bool(loaded & set(self.elastic)), options=self.solver)
+                                  load_response=bool(loaded & set(self.elastic)), options=self.model.solver)
         target = np.zeros((len(self.meshes), self.max_nodes, 3))
         contact = np.zeros_like(target)
         for i, elastic in self.elastic.items():

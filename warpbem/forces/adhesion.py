@@ -1,7 +1,7 @@
 """Receptor-ligand adhesion (thesis ch. 4): Hookean bonds (eq. 4.3, 4.4) with Bell kinetics
 (eq. 4.1, 4.2) by Monte Carlo, and the Hertz contact patch (eq. 4.8, 4.9). The device code and
-its launchers are ``kernels/bonds.py``; this module holds the parameters, the receptors and the
-protocol.
+its launchers are ``kernels/bonds.py``; this module holds the parameters (``Adhesion``,
+``BondOptions``), the receptors and the protocol (``BoundAdhesion``, on a model's bodies).
 
 Model, written down (SI):
 
@@ -43,7 +43,7 @@ Model, written down (SI):
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, dataclass
 
 import numpy as np
 
@@ -52,7 +52,7 @@ from ..options import OptionError, declared, option, validate
 from ..surfaces import quad9
 from ..surfaces.gaps import WALL, bounding_spheres
 from . import hertz
-from .interaction import ImplicitCoordinates, Interaction
+from .interaction import BoundInteraction, ImplicitCoordinates, Interaction
 from .repulsion import Repulsion
 
 BOLTZMANN = 1.380649e-23  # J/K
@@ -127,58 +127,11 @@ def sample_receptors(mesh, density: float, roughness: float, rng):
     return tips[:count], sites[:count], weights[:count]
 
 
-class Adhesion(Interaction):
-    """Bonds between the adhesive free cells and the wall, or the fixed cells marked in
-    ``ligand_bodies`` (module docstring), with the parameters of ``options`` (``BondOptions``;
-    layers not given: the default repulsion's roughness); per body ``shear_modulus`` (Pa, None
-    or 0: rigid, no contact patch) and ``poisson_ratio``; ``adhesive`` (default: every free
-    body). The parameters are also attributes of the same names."""
+class BondLaws:
+    """The bond model's rates and law (module docstring) from its parameters, the attributes of
+    ``BondOptions``'s names (its layers resolved), which the configuration (``Adhesion``) and
+    its binding (``BoundAdhesion``) both carry."""
 
-    name = "bond"
-    implicit = True
-
-    def __init__(self, meshes, fixed, options: BondOptions, *, shear_modulus=None, poisson_ratio=None,
-                 adhesive=None, ligand_bodies=None):
-        n = len(meshes)
-        self.options = options.resolved(Repulsion.cell_roughness, Repulsion.wall_roughness)
-        for name, _, _ in declared(BondOptions):  # read as attributes throughout the bond model
-            setattr(self, name, getattr(self.options, name))
-        fixed = np.asarray(fixed, dtype=bool)
-        adhesive = ~fixed if adhesive is None else np.asarray(adhesive, dtype=bool) & ~fixed
-        self.cells = np.flatnonzero(adhesive)  # adhesive free bodies, in body order
-        if not len(self.cells):
-            raise ValueError("adhesion needs at least one adhesive free body")
-        carriers = np.zeros(n, dtype=bool) if ligand_bodies is None else np.asarray(ligand_bodies, dtype=bool)
-        if carriers.shape != (n,) or np.any(carriers & ~fixed):
-            raise ValueError("ligand_bodies must mark fixed bodies only (one flag per body): ligands on a moving"
-                             " cell are not modelled")
-        self.ligand_bodies = np.flatnonzero(carriers)
-        modulus = np.zeros(n) if shear_modulus is None else np.array(
-            [0.0 if g is None else g for g in shear_modulus], dtype=float)
-        ratio = np.full(n, 0.33) if poisson_ratio is None else np.array(
-            [0.33 if v is None else v for v in poisson_ratio], dtype=float)
-        if modulus.shape != (n,) or np.any(~np.isfinite(modulus)) or np.any(modulus < 0):
-            raise ValueError(f"shear_modulus must be >= 0 (Pa) for each of the {n} bodies, got {modulus.tolist()}")
-        if ratio.shape != (n,) or np.any(ratio <= -1) or np.any(ratio >= 0.5):
-            raise ValueError(f"poisson_ratio must be in (-1, 0.5) for each of the {n} bodies, got {ratio.tolist()}")
-        self.shear_modulus, self.poisson_ratio = modulus, ratio
-        self.radius = np.array([m.equivalent_radius() for m in meshes])
-        rng = np.random.default_rng(self.seed)
-        sampled = [sample_receptors(meshes[b], self.receptor_density, self.roughness, rng) for b in self.cells]
-        tips = [t for t, _, _ in sampled]
-        self.tips = np.concatenate(tips)
-        # the mesh nodes under each tip and their weights: a deformed cell carries its tips
-        self.tip_nodes = np.concatenate([meshes[b].elements[e] for b, (_, e, _) in zip(self.cells, sampled)])
-        self.tip_weights = np.concatenate([w for _, _, w in sampled])
-        self.meshes = list(meshes)
-        self.receptor_body = np.concatenate([np.full(len(t), b) for t, b in zip(tips, self.cells)]).astype(np.int32)
-        self.receptor_start = np.concatenate([[0], np.cumsum([len(t) for t in tips])]).astype(np.int32)
-        self.n_bodies = n
-        self.capacity = self.max_bonds * len(self.cells)
-        self.device = None
-        self._last_state = None  # (contacts, part, vector, moment): _bonds_at
-
-    # -- rates ------------------------------------------------------------------------------
     @property
     def thermal_energy(self) -> float:
         return BOLTZMANN * self.temperature
@@ -205,12 +158,125 @@ class Adhesion(Interaction):
         f = self.spring_constant * (np.asarray(length, dtype=float) - self.equilibrium_length)
         return f if self.compression else np.maximum(f, 0.0)
 
-    # -- device -----------------------------------------------------------------------------
-    def prepare(self, device):
+    def law(self, s):
+        """U = sigma (|x| - lambda)^2 / 2 of each bond vector x (only |x| > lambda when bonds
+        resist tension only), f = -dU/dx, and the 3 x 3 Hessian sigma [x^ x^ + (stretch / |x|)
+        (I - x^ x^)] (its transverse part left out where a compressed bond makes it negative)."""
+        x = s.reshape(-1, 3)
+        length = np.linalg.norm(x, axis=1)
+        unit = np.divide(x, length[:, None], out=np.zeros_like(x), where=length[:, None] > 0)
+        stretch = length - self.equilibrium_length
+        if not self.compression:
+            stretch = np.maximum(stretch, 0.0)
+        sigma = self.spring_constant
+        outer = unit[:, :, None] * unit[:, None, :]
+        radial = np.where(self.compression | (stretch > 0), sigma, 0.0)[:, None, None] * outer
+        transverse = sigma * np.divide(np.maximum(stretch, 0.0), length, out=np.zeros_like(length), where=length > 0)
+        stiffness = radial + transverse[:, None, None] * (np.eye(3) - outer)
+        energy = np.repeat(0.5 * sigma * stretch**2 / 3.0, 3)
+        return energy, (-sigma * stretch[:, None] * unit).ravel(), stiffness
+
+    @property
+    def reach(self) -> float:
+        """Height (m) of a tip above the wall beyond which formation is below 1e-6 of k_f0:
+        lambda + ligand layer + the deviation where eq. 4.2 falls to that (sigma d^2 / 2 kT ~ ln 1e6)."""
+        deviation = np.sqrt(2.0 * self.thermal_energy * np.log(1e6) / self.spring_constant) + self.reactive_compliance
+        return self.equilibrium_length + self.ligand_layer + deviation
+
+    @property
+    def cell_reach(self) -> float:
+        """As ``reach``, from the surface of a ligand-bearing cell (its layer: its microvilli)."""
+        return self.reach - self.ligand_layer + self.cell_ligand_layer
+
+
+@dataclass(frozen=True)
+class Adhesion(BondLaws, Interaction):
+    """Bonds between the adhesive free cells and the wall, or the fixed cells marked in
+    ``ligand_bodies`` (module docstring), with the parameters of ``options`` (``BondOptions``;
+    layers not given: the default repulsion's roughness); per body of the model
+    ``shear_modulus`` (Pa, None or 0: rigid, no contact patch) and ``poisson_ratio``;
+    ``adhesive`` (default: every free body). The parameters are also attributes of the same
+    names. The receptors are sampled on the model's meshes when it is bound (``BoundAdhesion``)."""
+
+    name = "bond"
+    implicit = True
+
+    options: BondOptions
+    _: KW_ONLY
+    shear_modulus: tuple | None = None
+    poisson_ratio: tuple | None = None
+    adhesive: tuple | None = None
+    ligand_bodies: tuple | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "options", self.options.resolved(Repulsion.cell_roughness, Repulsion.wall_roughness))
+        for name in ("shear_modulus", "poisson_ratio", "adhesive", "ligand_bodies"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, tuple(getattr(self, name)))
+        for name, _, _ in declared(BondOptions):  # read as attributes throughout the bond model
+            object.__setattr__(self, name, getattr(self.options, name))
+
+    def per_body(self, model):
+        """(the adhesive free bodies, the ligand-bearing fixed bodies (indices, in body order),
+        each body's shear modulus (Pa; 0: rigid) and Poisson ratio) on ``model``'s bodies;
+        ValueError where they do not fit them."""
+        n = model.n_bodies
+        fixed = model.fixed_mask
+        adhesive = ~fixed if self.adhesive is None else np.asarray(self.adhesive, dtype=bool) & ~fixed
+        cells = np.flatnonzero(adhesive)
+        if not len(cells):
+            raise ValueError("adhesion needs at least one adhesive free body")
+        carriers = np.zeros(n, dtype=bool) if self.ligand_bodies is None else np.asarray(self.ligand_bodies, dtype=bool)
+        if carriers.shape != (n,) or np.any(carriers & ~fixed):
+            raise ValueError("ligand_bodies must mark fixed bodies only (one flag per body): ligands on a moving"
+                             " cell are not modelled")
+        modulus = np.zeros(n) if self.shear_modulus is None else np.array(
+            [0.0 if g is None else g for g in self.shear_modulus], dtype=float)
+        ratio = np.full(n, 0.33) if self.poisson_ratio is None else np.array(
+            [0.33 if v is None else v for v in self.poisson_ratio], dtype=float)
+        if modulus.shape != (n,) or np.any(~np.isfinite(modulus)) or np.any(modulus < 0):
+            raise ValueError(f"shear_modulus must be >= 0 (Pa) for each of the {n} bodies, got {modulus.tolist()}")
+        if ratio.shape != (n,) or np.any(ratio <= -1) or np.any(ratio >= 0.5):
+            raise ValueError(f"poisson_ratio must be in (-1, 0.5) for each of the {n} bodies, got {ratio.tolist()}")
+        return cells, np.flatnonzero(carriers), modulus, ratio
+
+    def check(self, model):
+        self.per_body(model)
+
+    def bound(self, model, device=None) -> "BoundAdhesion":
+        return BoundAdhesion(self, model, device)
+
+
+class BoundAdhesion(BondLaws, BoundInteraction):
+    """The bonds of an ``Adhesion`` on a model's bodies: the receptors sampled on its meshes
+    (``tips``, body frame, the cells' in body order from the seed's stream), the bond table's
+    layout, and on a device the kernels and static arrays (``kernels/bonds.py``). The
+    parameters are attributes of the same names, as on the configuration."""
+
+    def __init__(self, interaction: Adhesion, model, device=None):
+        super().__init__(interaction, model, None if device is None else runtime.resolve_device(device))
+        for name, _, _ in declared(BondOptions):
+            setattr(self, name, getattr(interaction.options, name))
+        self.cells, self.ligand_bodies, self.shear_modulus, self.poisson_ratio = interaction.per_body(model)
+        meshes = model.meshes
+        self.radius = np.array([m.equivalent_radius() for m in meshes])
+        rng = np.random.default_rng(self.seed)
+        sampled = [sample_receptors(meshes[b], self.receptor_density, self.roughness, rng) for b in self.cells]
+        tips = [t for t, _, _ in sampled]
+        self.tips = np.concatenate(tips)
+        # the mesh nodes under each tip and their weights: a deformed cell carries its tips
+        self.tip_nodes = np.concatenate([meshes[b].elements[e] for b, (_, e, _) in zip(self.cells, sampled)])
+        self.tip_weights = np.concatenate([w for _, _, w in sampled])
+        self.receptor_body = np.concatenate([np.full(len(t), b) for t, b in zip(tips, self.cells)]).astype(np.int32)
+        self.receptor_start = np.concatenate([[0], np.cumsum([len(t) for t in tips])]).astype(np.int32)
+        self.n_bodies = model.n_bodies
+        self.capacity = self.max_bonds * len(self.cells)
+        self._last_state = None  # (contacts, part, vector, moment): _bonds_at
+        if self.device is None:
+            return  # the model's host view: no device data (forces/interaction.py)
         wp = runtime.init()
         from ..kernels.bonds import build_bond_kernels
 
-        self.device = runtime.resolve_device(device)
         self.wp, self.k = wp, build_bond_kernels(wp.float64)
         wp.load_module(self.k.bond_geometry.module, device=self.device)
         self._tips = wp.array(self.tips, dtype=self.k.vec3, device=self.device)
@@ -222,6 +288,7 @@ class Adhesion(Interaction):
 
             self.contact = build_contact_kernels(wp.float64)
 
+    # -- device -----------------------------------------------------------------------------
     def tips_at(self, bodies) -> np.ndarray:
         """The tips (R, 3, body frame) on the bodies' surfaces of a state: the reference tips
         moved by the displacement of the surface under them, for cells whose mesh at the state
@@ -229,19 +296,18 @@ class Adhesion(Interaction):
         adhesion passes the shapes the gaps are measured on (``Contacts.shapes``: without the
         cell's response to its own loads, the fluid's answer included, which the bond's spring
         and the Hertz patch carry; elastic/deformable.py, "Contacts")."""
-        tips = self.tips
+        tips, meshes = self.tips, self.model.meshes
         for c, b in enumerate(self.cells):
-            if bodies[b].mesh is not self.meshes[b]:
+            if bodies[b].mesh is not meshes[b]:
                 rows = slice(self.receptor_start[c], self.receptor_start[c + 1])
-                shift = bodies[b].mesh.nodes - self.meshes[b].nodes
+                shift = bodies[b].mesh.nodes - meshes[b].nodes
                 tips = tips.copy() if tips is self.tips else tips
                 tips[rows] += np.einsum("ra,rai->ri", self.tip_weights[rows], shift[self.tip_nodes[rows]])
         return tips
 
     def _frame(self, bodies, contacts, part):
         """Device arrays of the configuration: positions, rotations, patch centres and radii."""
-        if self.device is None:
-            self.prepare("cpu")
+        self._stepping()
         wp, k = self.wp, self.k
         centre = np.array([b.position for b in bodies])
         for b in self.cells:
@@ -255,6 +321,7 @@ class Adhesion(Interaction):
                     curvature=self._curvature)
 
     def _table(self, part):
+        self._stepping()
         wp, k = self.wp, self.k
         return (wp.array(part["receptor"].astype(np.int32), dtype=int, device=self.device),
                 wp.array(part["anchor"], dtype=k.vec3, device=self.device),
@@ -355,36 +422,6 @@ class Adhesion(Interaction):
                 points[i::3][on_cell, partner[on_cell]] = anchors
         return ImplicitCoordinates(vector.ravel(), unit_force, unit_torque, points)
 
-    def law(self, s):
-        """U = sigma (|x| - lambda)^2 / 2 of each bond vector x (only |x| > lambda when bonds
-        resist tension only), f = -dU/dx, and the 3 x 3 Hessian sigma [x^ x^ + (stretch / |x|)
-        (I - x^ x^)] (its transverse part left out where a compressed bond makes it negative)."""
-        x = s.reshape(-1, 3)
-        length = np.linalg.norm(x, axis=1)
-        unit = np.divide(x, length[:, None], out=np.zeros_like(x), where=length[:, None] > 0)
-        stretch = length - self.equilibrium_length
-        if not self.compression:
-            stretch = np.maximum(stretch, 0.0)
-        sigma = self.spring_constant
-        outer = unit[:, :, None] * unit[:, None, :]
-        radial = np.where(self.compression | (stretch > 0), sigma, 0.0)[:, None, None] * outer
-        transverse = sigma * np.divide(np.maximum(stretch, 0.0), length, out=np.zeros_like(length), where=length > 0)
-        stiffness = radial + transverse[:, None, None] * (np.eye(3) - outer)
-        energy = np.repeat(0.5 * sigma * stretch**2 / 3.0, 3)
-        return energy, (-sigma * stretch[:, None] * unit).ravel(), stiffness
-
-    @property
-    def reach(self) -> float:
-        """Height (m) of a tip above the wall beyond which formation is below 1e-6 of k_f0:
-        lambda + ligand layer + the deviation where eq. 4.2 falls to that (sigma d^2 / 2 kT ~ ln 1e6)."""
-        deviation = np.sqrt(2.0 * self.thermal_energy * np.log(1e6) / self.spring_constant) + self.reactive_compliance
-        return self.equilibrium_length + self.ligand_layer + deviation
-
-    @property
-    def cell_reach(self) -> float:
-        """As ``reach``, from the surface of a ligand-bearing cell (its layer: its microvilli)."""
-        return self.reach - self.ligand_layer + self.cell_ligand_layer
-
     def cell_ligands(self, bodies):
         """Per receptor, the ligand on a ligand-bearing fixed cell nearest to its rest length:
         (anchor (R, 3), deviation (R,) m, partner (R,) body or -1), from the exact closest point
@@ -455,8 +492,7 @@ class Adhesion(Interaction):
         the seed's stream), then the new contact radius from the bonds' normal force there."""
         from ..kernels import bonds
 
-        if self.device is None:
-            self.prepare("cpu")
+        self._stepping()
         wp, k = self.wp, self.k
         draw = int(part["draws"])
         receptor, anchor, offset = table = self._table(part)

@@ -1,17 +1,42 @@
-"""What an interaction is to the time step (DESIGN.md §3, step 3 "loads"): one object with a
-small protocol, so that a new force (bonds, Hertz contact, lubrication) plugs in without
-touching the step.
+"""What an interaction is to the time step (DESIGN.md §3, step 3 "loads"): a configuration
+that, bound to a model, answers a small protocol, so that a new force (bonds, Hertz contact,
+lubrication) plugs in without touching the step.
 
-An interaction is given the bodies of a state (``surfaces.Body``, SI) and that state's
-``Contacts`` (exact gaps, computed once per state and shared), and answers in one of two ways:
+Configuration and binding. An ``Interaction`` is a configuration: its parameters only (a
+spring constant, densities per body), frozen when made. The ``Model`` holds it beside the
+meshes, fixed flags and flow, and is the one source of all of them: when made it calls
+``check(model)`` on each interaction, which raises ``ValueError`` where the configuration does
+not fit the bodies (one density per body, ligands on fixed bodies only). ``bound(model,
+device)`` returns a ``BoundInteraction``: what the configuration derives from the model
+(receptor tips sampled on the meshes, the weight of each free body, the size of the bond table)
+and, with a device, the device data (compiled kernels, static arrays, assembled elastic
+operators). The bound object carries the protocol below; it reads the meshes, fixed flags,
+flow and solver options from its ``model``, never from copies of its own.
+
+Two bindings serve a run. The ``Simulator`` binds each interaction on its device and steps
+with those (several simulators, on several devices, can share one model). The model keeps its
+own binding without a device (``Model.bound_interactions``, made when first asked for), the
+host view its own methods read: the bodies' shapes at a state (``Model.bodies``: a deformable
+cell's displaced mesh), each interaction's start (``Model.initial_state``) and the state's
+layout, which frames write and resumed runs read back (``frame_columns``, ``derived_values``).
+Those need the meshes but no device, and the model can then answer without a simulator (a
+scene builds its start state before any device is chosen). Both bindings derive from the same
+model by the same code (tips from the same seeded stream), so they agree; the host view's
+stepping methods (bond kinetics, the elastic solves) are not for use: they raise
+``RuntimeError``.
+
+The protocol. A bound interaction is given the bodies of a state (``surfaces.Body``, SI) and
+that state's ``Contacts`` (exact gaps, computed once per state and shared), and answers in one
+of two ways:
 
 * **explicit**: ``explicit_loads`` returns the force and torque it puts on each body (gravity,
   given loads); the step adds them to the loads of the mobility solve;
 * **implicit** (stiff laws: repulsion, bond springs): ``implicit_coordinates`` returns scalar
   coordinates s_c (a separation, a bond length; m) and the loads of a unit force along each;
-  ``law(s)`` gives each coordinate's convex energy U (J), its force f = -dU/ds (N, along the
-  unit load) and stiffness dU^2/ds^2 (N/m). The step takes the forces of every implicit
-  interaction together at the end of the step (backward Euler, ``dynamics/implicit.py``):
+  ``law(s)`` (the configuration's: it depends on parameters only) gives each coordinate's
+  convex energy U (J), its force f = -dU/ds (N, along the unit load) and stiffness dU^2/ds^2
+  (N/m). The step takes the forces of every implicit interaction together at the end of the
+  step (backward Euler, ``dynamics/implicit.py``):
 
       s_c' = s_c + dt (r_c + sum_d B_cd f_d),   f_c = f(s_c'),
 
@@ -32,12 +57,12 @@ interaction that shapes bodies (deformable cells) gives their meshes from its pa
 ``surface_velocities``, and the part of the step's end in ``advance_shape``, from the start
 state. Implicit interactions whose forces act at points of the surfaces (contacts) give those
 points with their coordinates (``ImplicitCoordinates.points``), so that a deforming cell feels
-them where they act.
+them where they act. What a bound interaction keeps between calls is its own (a warning given
+once, the bond geometry of the last state): the model and the configuration are never written.
 """
 
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -116,13 +141,55 @@ class ImplicitCoordinates:
 
 
 class Interaction:
-    """Base of every interaction: by default it contributes nothing and owns no state; each
-    subclass overrides the methods of its kind (module docstring). ``name`` keys its frame
-    columns and its part of the state."""
+    """Base of every interaction's configuration (module docstring): parameters only, frozen.
+    ``name`` keys its frame columns and its part of the state; ``implicit``: its forces are a
+    stiff law (``law``); ``shapes_bodies``: it sets the bodies' meshes (deformable cells)."""
 
     name = "interaction"
     shapes_bodies = False  # True: body_meshes / advance_shape apply (deformable cells)
-    implicit = False  # True: implicit_coordinates / implicit_magnitudes / magnitudes_at apply
+    implicit = False  # True: implicit_coordinates / law apply
+
+    def check(self, model) -> None:
+        """Raise ValueError where this configuration does not fit ``model``'s bodies (called by
+        the model when it is made); by default anything fits."""
+
+    def bound(self, model, device=None) -> "BoundInteraction":
+        """This interaction bound to ``model``: what it derives from the model's meshes, fixed
+        flags and flow, with its device data on ``device`` (None: none, the model's host view;
+        module docstring); by default a binding that contributes nothing."""
+        return BoundInteraction(self, model, device)
+
+    def law(self, s: np.ndarray):
+        """(energy J, force N, stiffness N/m) of coordinates at values s (m); energy +inf where
+        the law is not defined (layers that touch)."""
+        raise NotImplementedError(f"{type(self).__name__} is not an implicit interaction")
+
+
+class BoundInteraction:
+    """An ``interaction`` bound to a ``model`` (and a ``device``, or None: the host view): the
+    protocol of the step (module docstring). By default it contributes nothing and owns no
+    state; each interaction's binding overrides the methods of its kind."""
+
+    def __init__(self, interaction: Interaction, model, device=None):
+        self.interaction, self.model, self.device = interaction, model, device
+
+    @property
+    def name(self) -> str:
+        return self.interaction.name
+
+    @property
+    def implicit(self) -> bool:
+        return self.interaction.implicit
+
+    @property
+    def shapes_bodies(self) -> bool:
+        return self.interaction.shapes_bodies
+
+    def _stepping(self) -> None:
+        """Raise where the host view (bound without a device) is asked to step."""
+        if self.device is None:
+            raise RuntimeError(f"the {self.name} interaction is bound without a device (the model's host view,"
+                               " Model.bound_interactions): step with a Simulator, which binds its own")
 
     def explicit_loads(self, bodies, contacts) -> Loads | None:
         return None
@@ -134,9 +201,8 @@ class Interaction:
         return None
 
     def law(self, s: np.ndarray):
-        """(energy J, force N, stiffness N/m) of coordinates at values s (m); energy +inf where
-        the law is not defined (layers that touch)."""
-        raise NotImplementedError(f"{type(self).__name__} is not an implicit interaction")
+        """The configuration's law (``Interaction.law``)."""
+        return self.interaction.law(s)
 
     def longest_step(self, bodies, contacts, part) -> float:
         """The longest step (s) this interaction allows from this state."""
@@ -180,17 +246,6 @@ class Interaction:
         """Per body, the velocity (elements, 3; m/s, body frame) of its surface on top of its
         rigid motion at a state with this part (a deforming cell's), or None; default unchanged."""
         return velocities
-
-    def prepare(self, device) -> None:
-        """Put device data (kernels, static arrays) on ``device`` before the first step."""
-
-    def bound(self, device) -> "Interaction":
-        """A copy of this interaction with its device data on ``device`` (``prepare``): the
-        simulator steps with it, so the model's interactions stay as configured and one model
-        can serve several simulators and devices."""
-        other = copy.copy(self)
-        other.prepare(device)
-        return other
 
     def derived_columns(self) -> dict:
         """{column name: (unit, per-frame shape, description)} computed from ``part``."""

@@ -28,7 +28,8 @@ stiff law: ``dynamics/implicit.py``), which is stable for any step and keeps eps
 energy U is a barrier: +inf once the layers touch. As an interaction
 (``forces/interaction.py``) its coordinates are the separations of the contacts within reach,
 each with the unit loads of a repulsive force along the contact normal, applied at the closest
-points.
+points; the law is the configuration's, the search of the contacts its binding's
+(``BoundRepulsion``), which derives nothing from the model.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ import numpy as np
 from ..options import option, validate
 from ..surfaces.gaps import WALL
 from ..surfaces.placement import PlacementError
-from .interaction import ImplicitCoordinates, Interaction
+from .interaction import BoundInteraction, ImplicitCoordinates, Interaction
 
 NEGLIGIBLE_FORCE = 1e-18  # N: contacts whose force would be smaller are left out
 
@@ -101,18 +102,26 @@ class Repulsion(Interaction):
         energy = np.where(inside, self.potential(eps), np.inf)
         return energy, np.where(inside, self.force(eps), 0.0), np.where(inside, -self.slope(eps), 0.0)
 
+    def bound(self, model, device=None) -> "BoundRepulsion":
+        return BoundRepulsion(self, model)
+
+
+class BoundRepulsion(BoundInteraction):
+    """The repulsion's contacts at a state (its law: the configuration's, ``Repulsion.law``)."""
+
     def implicit_coordinates(self, bodies, contacts, part, velocity, angular_velocity, dt):
         """The contacts whose separation can come within ``reach`` over a step of at most dt:
         searched out to reach + both roughness layers + twice the distance the fastest surface
         point travels in dt; a contact stays if its separation, closing at its current rate, gets
         within reach. Roughness layers that touch already are a PlacementError (the step retries
         shorter)."""
+        rep = self.interaction
         speed = np.abs(velocity).max() + np.abs(angular_velocity).max() * contacts.outer_radii.max()
-        search = self.reach + 2.0 * self.cell_roughness + 2.0 * speed * dt
+        search = rep.reach + 2.0 * rep.cell_roughness + 2.0 * speed * dt
         n = len(bodies)
         kept = []
         for gap in contacts.within(search):
-            eps = self.separation(gap.distance, gap.other == WALL)
+            eps = rep.separation(gap.distance, gap.other == WALL)
             if eps <= 0.0:
                 other = "the wall" if gap.other == WALL else f"body {gap.other}"
                 raise PlacementError(f"the roughness layers of body {gap.body} and {other} touch"
@@ -124,7 +133,7 @@ class Repulsion(Interaction):
                     torque[body] = sign * np.cross(point - bodies[body].position, gap.normal)
                     points[body] = point
             rate = float(np.sum(force * velocity) + np.sum(torque * angular_velocity))
-            if eps + dt * min(rate, 0.0) < self.reach:
+            if eps + dt * min(rate, 0.0) < rep.reach:
                 kept.append((eps, force, torque, points))
         if not kept:
             return None
