@@ -31,7 +31,8 @@ import warpbem as wb
 from common import arguments, output, print_table, pyplot, save_chart, write_csv
 from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy, build_solver
 from warpbem.dynamics.simulator import Simulator
-from warpbem.forces.adhesion import Adhesion, BondOptions
+from warpbem.forces.adhesion import Adhesion
+from warpbem.forces.bond_model import BondOptions
 from warpbem.forces.external import STANDARD_GRAVITY, Gravity
 from warpbem.forces.repulsion import Repulsion
 from warpbem.surfaces.body import Body

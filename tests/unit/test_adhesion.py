@@ -10,7 +10,8 @@ import warpbem as wb
 from warpbem.app import scene
 from warpbem.forces import hertz
 from warpbem.dynamics import Model
-from warpbem.forces.adhesion import BOLTZMANN, Adhesion, BondOptions
+from warpbem.forces.adhesion import Adhesion
+from warpbem.forces.bond_model import BOLTZMANN, BondOptions
 from warpbem.surfaces.body import Body
 from warpbem.surfaces.gaps import Contacts, GapFinder
 from tests.scene_points import sweep_scenes

@@ -17,7 +17,8 @@ from warpbem.app import run
 from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy
 from warpbem.dynamics.simulator import Simulator
 from warpbem.dynamics.state import State
-from warpbem.forces.adhesion import BOLTZMANN, Adhesion, BondOptions
+from warpbem.forces.adhesion import Adhesion
+from warpbem.forces.bond_model import BOLTZMANN, BondOptions
 from warpbem.forces.external import STANDARD_GRAVITY, Gravity
 from warpbem.forces.repulsion import Repulsion
 from warpbem.surfaces.body import Body

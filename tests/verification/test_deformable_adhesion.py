@@ -20,7 +20,8 @@ import warpbem as wb
 from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy
 from warpbem.dynamics.simulator import Simulator
 from warpbem.elastic.deformable import Deformation
-from warpbem.forces.adhesion import Adhesion, BondOptions
+from warpbem.forces.adhesion import Adhesion
+from warpbem.forces.bond_model import BondOptions
 from warpbem.forces.external import STANDARD_GRAVITY, Gravity
 from warpbem.forces.repulsion import Repulsion
 from warpbem.surfaces.body import Body

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from ..dynamics.model import StepPolicy
 from ..elastic.deformable import DeformationOptions
-from ..forces.adhesion import BondOptions
+from ..forces.bond_model import BondOptions
 from ..forces.repulsion import Repulsion
 from ..hydro.options import Flow, SolverOptions
 from ..options import reference_rows

@@ -24,7 +24,8 @@ from ..dynamics.integrate import DEFAULT_SCHEME, SCHEMES
 from ..dynamics.model import Flow, Model, SolverOptions, StepPolicy
 from ..dynamics.state import State
 from ..elastic.deformable import Deformation, DeformationOptions
-from ..forces.adhesion import Adhesion, BondOptions
+from ..forces.adhesion import Adhesion
+from ..forces.bond_model import BondOptions
 from ..forces.external import FLUID_DENSITY, STANDARD_GRAVITY, ExternalLoads, Gravity
 from ..forces.repulsion import Repulsion
 from ..options import OptionError, check_keys, declared, from_table, option, validate

@@ -1,192 +1,26 @@
-"""Receptor-ligand adhesion (thesis ch. 4): Hookean bonds (eq. 4.3, 4.4) with Bell kinetics
-(eq. 4.1, 4.2) by Monte Carlo, and the Hertz contact patch (eq. 4.8, 4.9). The device code and
-its launchers are ``kernels/bonds.py``; this module holds the parameters (``Adhesion``,
-``BondOptions``), the receptors and the protocol (``BoundAdhesion``, on a model's bodies).
-
-Model, written down (SI):
-
-* Receptors sit at microvillus tips, ``roughness`` (175 nm, Table 4.1) out along the outward
-  normal from the surface of each adhesive free cell, placed uniformly by area with density
-  ``receptor_density`` (1/m^2) from the seed (a 5 um cell at 20 /um^2 has 6283).
-* Ligands are in excess in the substrate layer 0 <= z <= ``ligand_layer`` (its roughness, 50 nm)
-  and, as an option, on fixed (adherent) cells (``ligand_bodies``), in the layer of their
-  microvilli (``cell_ligand_layer``, 175 nm) above their surface, so a free cell can bind to an
-  adherent one: a tip at distance r from that surface (exact closest point, Newton's method on
-  the QUAD9 element) binds to one at r - lambda along the line to it, clamped to the layer; a
-  bond to a cell pulls that cell back (its holding load carries the reaction).
-  On the wall:
-  a free receptor whose tip is at height z binds to one straight below at z - lambda, clamped
-  to the layer, so the bond forms at its rest length lambda wherever the tip is within
-  lambda .. lambda + layer of the wall, and stretched or compressed by the distance beyond.
-  With a finite ``ligand_density`` n_l the on-rate is scaled by min(1, n_l / n_r) (mean field:
-  the share of receptors facing a free ligand).
-* Formation: k_f = k_f0 exp(sigma |d| (r0 - |d|/2) / kT) (eq. 4.2; d the deviation from lambda);
-  rupture: k_r = k_r0 exp(r0 |F| / kT) (eq. 4.1), F = sigma (L - lambda) (only tension when
-  ``compression`` is false: a compressed bond is slack); each with probability 1 - exp(-k dt),
-  drawn after each accepted step at its end configuration. Note k_f / k_r = (k_f0 / k_r0)
-  exp(-sigma d^2 / 2kT): the rates obey detailed balance, so a stiff bond forms only within
-  sqrt(2 kT / sigma) of its rest length (0.3 nm at 100 dyn/cm, 4 nm at 0.5 dyn/cm).
-* Forces: the bond springs are an implicit interaction (coordinates: bond lengths, energy
-  sigma (L - lambda)^2 / 2), solved with the repulsion at the end of each step
-  (``dynamics/implicit.py``), so the step is set by the kinetics, k dt <= ``kinetics_fraction``
-  (``longest_step``), not by the spring stiffness.
-* Contact (ch. 4.2): after each step the normal component of the cell's bond forces,
-  F = max(0, -sum F_z), gives the Hertz contact radius a_s = (3 F a / (4 E*))^(1/3) on the
-  rigid wall, E* = E / (1 - nu^2), E = 2 G (1 + nu) (eq. 4.9, ``hertz.py``; a the cell's
-  equivalent radius); tips within the patch are flattened onto it (``kernels/bonds.py``), so the
-  receptors inside the contact area are those within reach. Before any bond has formed a_s = 0
-  and the receptors within reach are those of the cap that comes within lambda + layer of the
-  wall (the thesis's first-step anchoring). Rigid cells (no shear modulus) keep a_s = 0.
-* Cap: at most ``max_bonds`` per cell, which is also the size of each cell's bond table.
+"""Receptor-ligand adhesion as an interaction of the time step (thesis ch. 4): Hookean bonds
+with Bell kinetics by Monte Carlo and the Hertz contact patch (eq. 4.8, 4.9), between adhesive
+free cells and the wall or ligand-bearing fixed cells. The model and its parameters are written
+down in ``bond_model.py``; this module holds the configuration (``Adhesion``) and its binding to
+a model's bodies (``BoundAdhesion``: the receptors, the bond table, the protocol); the device
+code and its launchers are ``kernels/bonds.py``.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import KW_ONLY, dataclass
 
 import numpy as np
 
 from .. import runtime
-from ..options import OptionError, declared, option, validate
-from ..surfaces import quad9
+from ..options import declared
 from ..surfaces.gaps import WALL, bounding_spheres
 from . import hertz
+from .bond_model import BondLaws, BondOptions, sample_receptors
 from .interaction import BoundInteraction, ImplicitCoordinates, Interaction
 from .repulsion import Repulsion
 
-BOLTZMANN = 1.380649e-23  # J/K
 APPROACH_MARGIN = 100e-9  # m: a cell approaches the wall far less than this in one step
-
-
-@dataclass(frozen=True)
-class BondOptions:
-    """The bond model's parameters (module docstring; defaults: thesis Table 4.1)."""
-
-    spring_constant: float | None = option(None, "bond spring constant sigma (eq. 4.3; Table 4.1: 0.5-100 dyn/cm ="
-                                           " 5e-4-0.1 N/m). Required", "N/m", kind=float, low=0.0, high=1e3,
-                                           low_open=True)
-    receptor_density: float = option(20e12, "receptors per area of an adhesive cell's surface, at its microvillus"
-                                     " tips", "1/m^2", low=0.0, high=1e18, low_open=True)
-    ligand_density: float | None = option(None, "ligands per area; the on-rate scales by min(1, n_l / n_r). Default:"
-                                          " ligands in excess", "1/m^2", kind=float, low=0.0, high=1e18,
-                                          low_open=True)
-    equilibrium_length: float = option(30e-9, "bond rest length lambda (eq. 4.3)", "m", low=0.0, high=1e-6)
-    off_rate: float = option(2.4, "unstressed rupture rate k_r0 (eq. 4.1)", "1/s", low=0.0, high=1e9)
-    on_rate: float = option(365.0, "formation rate k_f0 at the rest length (eq. 4.2)", "1/s", low=0.0, high=1e9)
-    reactive_compliance: float = option(0.39e-10, "Bell's reactive compliance r0 (eq. 4.1-4.2)", "m", low=0.0,
-                                        high=1e-8)
-    temperature: float = option(310.0, "absolute temperature T (k T in eq. 4.1-4.2)", "K", low=0.0, high=1e4,
-                                low_open=True)
-    max_bonds: int = option(100, "cap of bonds per cell (the size of its bond table)", low=1, high=1e5)
-    compression: bool = option(False, "bonds resist compression too (false: a compressed bond is slack)")
-    seed: int = option(0, "seed of the receptors' placement and the bond Monte Carlo", low=0, high=2**31 - 1)
-    roughness: float | None = option(None, "tip height of the receptors above the surface. Default: the repulsion's"
-                                     " cell_roughness", "m", kind=float, low=0.0, high=1e-5)
-    ligand_layer: float | None = option(None, "thickness of the wall's ligand layer. Default: the repulsion's"
-                                        " wall_roughness", "m", kind=float, low=0.0, high=1e-5)
-    kinetics_fraction: float = option(0.1, "the step keeps k dt below this for every bond rate", low=0.0, high=1.0,
-                                      low_open=True)
-    cell_ligand_layer: float | None = option(None, "thickness of the ligand layer on adherent cells. Default: the"
-                                             " repulsion's cell_roughness", "m", kind=float, low=0.0, high=1e-5)
-
-    def __post_init__(self):
-        validate(self)
-        if self.spring_constant is None:
-            raise OptionError("spring_constant: missing (N/m; thesis Table 4.1: 0.5-100 dyn/cm = 5e-4-0.1 N/m)")
-
-    def resolved(self, cell_roughness: float, wall_roughness: float) -> "BondOptions":
-        """The layers not given taken from the repulsion's roughness (m)."""
-        return dataclasses.replace(
-            self, roughness=cell_roughness if self.roughness is None else self.roughness,
-            ligand_layer=wall_roughness if self.ligand_layer is None else self.ligand_layer,
-            cell_ligand_layer=cell_roughness if self.cell_ligand_layer is None else self.cell_ligand_layer)
-
-
-def sample_receptors(mesh, density: float, roughness: float, rng):
-    """Tips (n, 3), body frame: points uniform by area on the QUAD9 surface (element by area,
-    then (s, t) by rejection on the surface Jacobian), moved ``roughness`` out along the normal;
-    and where each sits, (element (n,), shape function values (n, 9)) of its surface point, so
-    that a deforming surface carries it."""
-    nodes = mesh.element_nodes()
-    areas = mesh.element_areas()
-    count = int(round(density * areas.sum()))
-    tips, sites, weights = np.empty((0, 3)), np.empty(0, dtype=int), np.empty((0, 9))
-    while len(tips) < count:
-        n = 2 * (count - len(tips)) + 16
-        element = rng.choice(len(areas), size=n, p=areas / areas.sum())
-        s, t = rng.uniform(-1, 1, size=(2, n))
-        values, ds, dt = quad9.shape_functions(s, t)
-        x = np.einsum("na,nai->ni", values, nodes[element])
-        normal = np.cross(np.einsum("na,nai->ni", ds, nodes[element]), np.einsum("na,nai->ni", dt, nodes[element]))
-        jacobian = np.linalg.norm(normal, axis=1)
-        bound = 1.25 * areas[element] / 4.0  # above the element's largest Jacobian on these meshes
-        keep = rng.uniform(0, 1, size=n) * bound < jacobian
-        tips = np.concatenate([tips, (x + roughness * normal / jacobian[:, None])[keep]])
-        sites, weights = np.concatenate([sites, element[keep]]), np.concatenate([weights, values[keep]])
-    return tips[:count], sites[:count], weights[:count]
-
-
-class BondLaws:
-    """The bond model's rates and law (module docstring) from its parameters, the attributes of
-    ``BondOptions``'s names (its layers resolved), which the configuration (``Adhesion``) and
-    its binding (``BoundAdhesion``) both carry."""
-
-    @property
-    def thermal_energy(self) -> float:
-        return BOLTZMANN * self.temperature
-
-    @property
-    def effective_on_rate(self) -> float:
-        """k_f0, scaled by min(1, n_l / n_r) for a finite ligand density (1/s)."""
-        share = 1.0 if self.ligand_density is None else min(1.0, self.ligand_density / self.receptor_density)
-        return self.on_rate * share
-
-    @property
-    def fastest_formation(self) -> float:
-        """The largest k_f of eq. 4.2 (1/s), at d = r0."""
-        return self.effective_on_rate * np.exp(self.spring_constant * self.reactive_compliance**2
-                                               / (2.0 * self.thermal_energy))
-
-    def rupture_rate(self, force):
-        """k_r of eq. 4.1 for bond forces (N; tension positive)."""
-        return self.off_rate * np.exp(self.reactive_compliance * np.abs(force) / self.thermal_energy)
-
-    def tension(self, length):
-        """Bond force sigma (L - lambda) (N, tension positive; slack bonds carry none unless
-        ``compression``)."""
-        f = self.spring_constant * (np.asarray(length, dtype=float) - self.equilibrium_length)
-        return f if self.compression else np.maximum(f, 0.0)
-
-    def law(self, s):
-        """U = sigma (|x| - lambda)^2 / 2 of each bond vector x (only |x| > lambda when bonds
-        resist tension only), f = -dU/dx, and the 3 x 3 Hessian sigma [x^ x^ + (stretch / |x|)
-        (I - x^ x^)] (its transverse part left out where a compressed bond makes it negative)."""
-        x = s.reshape(-1, 3)
-        length = np.linalg.norm(x, axis=1)
-        unit = np.divide(x, length[:, None], out=np.zeros_like(x), where=length[:, None] > 0)
-        stretch = length - self.equilibrium_length
-        if not self.compression:
-            stretch = np.maximum(stretch, 0.0)
-        sigma = self.spring_constant
-        outer = unit[:, :, None] * unit[:, None, :]
-        radial = np.where(self.compression | (stretch > 0), sigma, 0.0)[:, None, None] * outer
-        transverse = sigma * np.divide(np.maximum(stretch, 0.0), length, out=np.zeros_like(length), where=length > 0)
-        stiffness = radial + transverse[:, None, None] * (np.eye(3) - outer)
-        energy = np.repeat(0.5 * sigma * stretch**2 / 3.0, 3)
-        return energy, (-sigma * stretch[:, None] * unit).ravel(), stiffness
-
-    @property
-    def reach(self) -> float:
-        """Height (m) of a tip above the wall beyond which formation is below 1e-6 of k_f0:
-        lambda + ligand layer + the deviation where eq. 4.2 falls to that (sigma d^2 / 2 kT ~ ln 1e6)."""
-        deviation = np.sqrt(2.0 * self.thermal_energy * np.log(1e6) / self.spring_constant) + self.reactive_compliance
-        return self.equilibrium_length + self.ligand_layer + deviation
-
-    @property
-    def cell_reach(self) -> float:
-        """As ``reach``, from the surface of a ligand-bearing cell (its layer: its microvilli)."""
-        return self.reach - self.ligand_layer + self.cell_ligand_layer
 
 
 @dataclass(frozen=True)
