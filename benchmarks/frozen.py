@@ -127,10 +127,10 @@ def rotated_array(loaded, degrees: float, about, free=None):
     for b in loaded.bodies:
         if b.fixed:
             dx, dy = b.position[0] - about[0], b.position[1] - about[1]
-            b = b._replace(position=(about[0] + c * dx - s * dy, about[1] + s * dx + c * dy, b.position[2]),
-                           orientation=tuple(float(v) for v in product(turn, b.orientation)))
+            b = replace(b, position=(about[0] + c * dx - s * dy, about[1] + s * dx + c * dy, b.position[2]),
+                        orientation=tuple(float(v) for v in product(turn, b.orientation)))
         elif free is not None and not bodies:
-            b = b._replace(position=tuple(float(v) for v in free))
+            b = replace(b, position=tuple(float(v) for v in free))
         bodies.append(b)
     return replace(loaded, bodies=tuple(bodies))
 
