@@ -135,16 +135,18 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
                   receptor_body: wp.array(dtype=int),
                   positions: wp.array(dtype=vec3), rotations: wp.array(dtype=mat33),
                   patch_centre: wp.array(dtype=vec3), patch_radius: wp.array(dtype=dtype),
-                  curvature: wp.array(dtype=dtype), rest: dtype, layer: dtype, spring_per_kt: dtype,
+                  curvature: wp.array(dtype=dtype), rest: dtype, ligand_low: dtype, ligand_high: dtype,
+                  spring_per_kt: dtype,
                   compliance: dtype, on_rate: dtype, dt: dtype, seed: int, draw: int,
                   cell_anchor: wp.array(dtype=vec3), cell_deviation: wp.array(dtype=dtype),
                   cell_partner: wp.array(dtype=int),
                   candidate: wp.array(dtype=int), anchor: wp.array(dtype=vec3), offset: wp.array(dtype=dtype),
                   partner: wp.array(dtype=int)):
         """Formation (eq. 4.2): k_f = k_f0 exp(sigma |d| (r0 - |d| / 2) / kT), d the deviation from
-        the rest length of the best ligand within reach. Ligands in excess fill the substrate
-        layer 0 <= z <= ``layer`` (its roughness), so a tip at height z finds one straight below
-        at z - lambda, clamped to the layer; or, if closer to its rest length, the best ligand on a
+        the rest length of the best ligand within reach. The wall's ligands, in excess, fill the
+        heights ``ligand_low`` <= z <= ``ligand_high`` (a layer, or a plane where the two are
+        equal: forces/bond_model.py), so a tip at height z finds one straight below at z - lambda,
+        clamped to them; or, if closer to its rest length, the best ligand on a
         ligand-bearing fixed cell (``cell_anchor``, ``cell_deviation``, ``cell_partner``: the
         body, -1 for none; found by ``closest_to_points``); formed with 1 - exp(-k_f dt)."""
         r = first + wp.tid()
@@ -157,7 +159,7 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
         rho = wp.sqrt((tip[0] - c[0]) * (tip[0] - c[0]) + (tip[1] - c[1]) * (tip[1] - c[1]))
         lowering = hertz_lowering(rho, patch_radius[b], curvature[b])
         tip = tip + vec3(zero, zero, lowering)
-        height = wp.clamp(tip[2] - rest, zero, layer)
+        height = wp.clamp(tip[2] - rest, ligand_low, ligand_high)
         d = wp.abs(tip[2] - height - rest)
         on_cell = cell_partner[r] >= 0 and wp.abs(cell_deviation[r]) < d
         if on_cell:
@@ -243,13 +245,13 @@ def mark_bound(kernels, device, n: int, bond_receptor, bound):
 
 
 def formation(kernels, device, n: int, bound, tips, receptor_body, positions, rotations, patch_centre, patch_radius,
-              curvature, rest, layer, spring_per_kt, compliance, on_rate, dt, seed: int, draw: int, cell_anchor,
-              cell_deviation, cell_partner, candidate, anchor, offset, partner):
+              curvature, rest, ligand_low, ligand_high, spring_per_kt, compliance, on_rate, dt, seed: int,
+              draw: int, cell_anchor, cell_deviation, cell_partner, candidate, anchor, offset, partner):
     """``candidate``, ``anchor``, ``offset`` and ``partner`` of the n receptors."""
     _launch(kernels.formation, device, n, [bound, tips, receptor_body, positions, rotations, patch_centre,
-                                           patch_radius, curvature, rest, layer, spring_per_kt, compliance, on_rate,
-                                           dt, seed, draw, cell_anchor, cell_deviation, cell_partner, candidate,
-                                           anchor, offset, partner])
+                                           patch_radius, curvature, rest, ligand_low, ligand_high, spring_per_kt,
+                                           compliance, on_rate, dt, seed, draw, cell_anchor, cell_deviation,
+                                           cell_partner, candidate, anchor, offset, partner])
 
 
 def insert(kernels, device, n: int, candidate, anchor, offset, partner, receptor_start, capacity: int, time,

@@ -172,6 +172,37 @@ def test_formation_in_the_kernel_follows_eq_4_2():
     assert not np.array_equal(other["receptor"], first["receptor"])
 
 
+@pytest.mark.parametrize("height", [50e-9, 20e-9])
+def test_on_a_ligand_plane_every_bond_forms_on_it_with_eq_4_2_at_its_own_stretch(height):
+    """ligand_geometry = "plane" (forces/bond_model.py): a tip at height z binds the point straight
+    below it on the plane z = h, so each new bond is anchored at (x, y, h) of its tip and its
+    deviation from the rest length is d = z - h - lambda, for every tip, eq. 4.2 with no band of
+    zero deviation: the expected formations sum_r 1 - exp(-k_f(d_r) dt) against the kernel's mean
+    over 300 draws, and every anchor where that geometry puts it (rigid cell: tips in the body frame
+    plus the position)."""
+    sigma, dt, rest = 3e-6, 1e-3, 30e-9
+    adh = adhesion(spring_constant=sigma, max_bonds=2000, ligand_geometry="plane", ligand_height=height)
+    assert adh.ligand_span == (height, height)
+    body = Body(MESH, position=(0, 0, A + 0.2e-6))
+    contacts = Contacts([body], [MESH.size()], True, GapFinder())
+    tips = body.position + adh.tips
+    d = np.abs(tips[:, 2] - height - rest)
+    kt = BOLTZMANN * 310.0
+    p = 1 - np.exp(-365.0 * np.exp(sigma * d * (0.39e-10 - 0.5 * d) / kt) * dt)
+    start = adh.initial_state([body])
+    counts = []
+    for draw in range(300):
+        part = adh.advance_state(dict(start, draws=np.array(float(draw))), [body], [body], contacts, dt, dt)
+        counts.append(part["count"][0])
+        formed = part["receptor"] >= 0
+        receptors = part["receptor"][formed].astype(int)
+        np.testing.assert_allclose(part["anchor"][formed], np.c_[tips[receptors, :2], np.full(len(receptors), height)],
+                                   rtol=0, atol=1e-15)
+    counts = np.array(counts)
+    assert p.sum() > 3
+    assert abs(counts.mean() - p.sum()) < 4 * np.sqrt((p * (1 - p)).sum() / len(counts))
+
+
 def test_cap_on_bonds_per_cell():
     """With max_bonds = 5 (thesis figs. 4.12-4.14 use 40) no cell ever holds more."""
     adh = adhesion(spring_constant=1e-9, on_rate=1e4, max_bonds=5)

@@ -151,11 +151,6 @@ class Model:
         """The host view (``bound_interactions``) of the interaction called ``name``, or None."""
         return next((x for x in self.bound_interactions if x.name == name), None)
 
-    @property
-    def implicit(self) -> tuple:
-        """The implicit interactions, solved together in every step (``dynamics/implicit.py``)."""
-        return tuple(x for x in self.interactions if x.implicit)
-
     def bodies(self, state: State, contact: bool = False) -> list[Body]:
         """The bodies of a state; ``contact``: with the shapes their gaps are measured on
         (``Interaction.body_meshes``), which differ from their surfaces only for deformable cells."""

@@ -348,7 +348,7 @@ class BoundAdhesion(BondLaws, BoundInteraction):
         bonds.formation(
             k, self.device, n_receptors,
             bound, frame["tips"], self._receptor_body, frame["positions"], frame["rotations"], frame["patch_centre"],
-            frame["patch_radius"], frame["curvature"], self.equilibrium_length, self.ligand_layer,
+            frame["patch_radius"], frame["curvature"], self.equilibrium_length, *self.ligand_span,
             self.spring_constant / self.thermal_energy, self.reactive_compliance, self.effective_on_rate, dt,
             self.seed, 2 * draw + 1, wp.array(cell_anchor, dtype=k.vec3, device=self.device),
             wp.array(cell_deviation, dtype=wp.float64, device=self.device),

@@ -14,10 +14,15 @@ Model, written down (SI):
   adherent one: a tip at distance r from that surface (exact closest point, Newton's method on
   the QUAD9 element) binds to one at r - lambda along the line to it, clamped to the layer; a
   bond to a cell pulls that cell back (its holding load carries the reaction).
-  On the wall:
-  a free receptor whose tip is at height z binds to one straight below at z - lambda, clamped
-  to the layer, so the bond forms at its rest length lambda wherever the tip is within
-  lambda .. lambda + layer of the wall, and stretched or compressed by the distance beyond.
+  On the wall, ``ligand_geometry`` says where the ligands are. The thesis speaks only of a
+  "surface attachment point" and gives no ligand density, so each is a completion of its model:
+  "layer" (ligands through the layer): a free receptor whose tip is at height z binds to one
+  straight below at z - lambda, clamped to the layer, so the bond forms at its rest length lambda
+  wherever the tip is within lambda .. lambda + layer of the wall, and stretched or compressed by
+  the distance beyond: the most binding-friendly rule, under which eq. 4.2's dependence on the
+  stretch acts only outside that band. "plane" (ligands on the plane z = ``ligand_height``): the
+  tip binds to the point straight below on the plane, its deviation d = z - h - lambda, eq. 4.2
+  as written, for every tip.
   With a finite ``ligand_density`` n_l the on-rate is scaled by min(1, n_l / n_r) (mean field:
   the share of receptors facing a free ligand).
 * Formation: k_f = k_f0 exp(sigma |d| (r0 - |d|/2) / kT) (eq. 4.2; d the deviation from lambda);
@@ -51,6 +56,7 @@ from ..options import OptionError, option, validate
 from ..surfaces import quad9
 
 BOLTZMANN = 1.380649e-23  # J/K
+LIGAND_GEOMETRIES = ("layer", "plane")  # BondOptions.ligand_geometry
 
 
 @dataclass(frozen=True)
@@ -79,6 +85,12 @@ class BondOptions:
                                      " cell_roughness", "m", kind=float, low=0.0, high=1e-5)
     ligand_layer: float | None = option(None, "thickness of the wall's ligand layer. Default: the repulsion's"
                                         " wall_roughness", "m", kind=float, low=0.0, high=1e-5)
+    ligand_geometry: str = option("layer", "where the wall's ligands are: layer (spread through 0 <= z <="
+                                  " ligand_layer: a tip at height z binds the one at z - lambda, clamped to the layer,"
+                                  " so inside it every bond forms at its rest length) or plane (on the plane z ="
+                                  " ligand_height: eq. 4.2's deviation measured to it)", choices=LIGAND_GEOMETRIES)
+    ligand_height: float | None = option(None, "height of the ligand plane (ligand_geometry = plane). Default: the"
+                                         " top of the ligand layer, ligand_layer", "m", kind=float, low=0.0, high=1e-5)
     kinetics_fraction: float = option(0.1, "the step keeps k dt below this for every bond rate", low=0.0, high=1.0,
                                       low_open=True)
     cell_ligand_layer: float | None = option(None, "thickness of the ligand layer on adherent cells. Default: the"
@@ -90,10 +102,13 @@ class BondOptions:
             raise OptionError("spring_constant: missing (N/m; thesis Table 4.1: 0.5-100 dyn/cm = 5e-4-0.1 N/m)")
 
     def resolved(self, cell_roughness: float, wall_roughness: float) -> "BondOptions":
-        """The layers not given taken from the repulsion's roughness (m)."""
+        """The layers not given taken from the repulsion's roughness (m), the ligand plane at the
+        top of the wall's layer."""
+        layer = wall_roughness if self.ligand_layer is None else self.ligand_layer
         return dataclasses.replace(
             self, roughness=cell_roughness if self.roughness is None else self.roughness,
-            ligand_layer=wall_roughness if self.ligand_layer is None else self.ligand_layer,
+            ligand_layer=layer,
+            ligand_height=layer if self.ligand_height is None else self.ligand_height,
             cell_ligand_layer=cell_roughness if self.cell_ligand_layer is None else self.cell_ligand_layer)
 
 
@@ -171,13 +186,22 @@ class BondLaws:
         return energy, (-sigma * stretch[:, None] * unit).ravel(), stiffness
 
     @property
+    def ligand_span(self) -> tuple:
+        """(lowest, highest) height (m) of the wall's ligands: the layer (0, ligand_layer), or the
+        plane (ligand_height, ligand_height) (module docstring)."""
+        if self.ligand_geometry == "plane":
+            return self.ligand_height, self.ligand_height
+        return 0.0, self.ligand_layer
+
+    @property
     def reach(self) -> float:
         """Height (m) of a tip above the wall beyond which formation is below 1e-6 of k_f0:
-        lambda + ligand layer + the deviation where eq. 4.2 falls to that (sigma d^2 / 2 kT ~ ln 1e6)."""
+        lambda + the highest ligand + the deviation where eq. 4.2 falls to that (sigma d^2 / 2 kT
+        ~ ln 1e6)."""
         deviation = np.sqrt(2.0 * self.thermal_energy * np.log(1e6) / self.spring_constant) + self.reactive_compliance
-        return self.equilibrium_length + self.ligand_layer + deviation
+        return self.equilibrium_length + self.ligand_span[1] + deviation
 
     @property
     def cell_reach(self) -> float:
         """As ``reach``, from the surface of a ligand-bearing cell (its layer: its microvilli)."""
-        return self.reach - self.ligand_layer + self.cell_ligand_layer
+        return self.reach - self.ligand_span[1] + self.cell_ligand_layer
