@@ -108,7 +108,8 @@ def test_patch_lowering_is_johnsons_hertz_surface():
 
 def test_bond_loads_match_numpy_and_the_vector_law_is_exact():
     """Eq. 4.3-4.4 on the device against NumPy: for random bond vectors on a cell, the per-cell
-    force sum_b F_b and torque sum_b (x_m - x_c) x F_b; and the implicit step's vector law:
+    force sum_b F_b and torque sum_b (x_m - x_c) x F_b, and one bond against its force and torque
+    written by hand; and the implicit step's vector law:
     f = -dU/dx and its 3 x 3 stiffness by central differences (tension only and both)."""
     adh = adhesion(max_bonds=50)
     rng = np.random.default_rng(3)
@@ -127,6 +128,20 @@ def test_bond_loads_match_numpy_and_the_vector_law_is_exact():
     np.testing.assert_allclose(force[0], expected.sum(axis=0), rtol=1e-12)
     np.testing.assert_allclose(torque[0], np.cross(tips - body.position, expected).sum(axis=0), rtol=1e-12)
     assert count[0] == 30
+    # one bond by hand: a tip of an unrotated cell, its anchor 50 nm straight below, so the
+    # 30 nm bond is stretched 20 nm and pulls the tip down with sigma 20 nm = 1e-11 N (eq. 4.3)
+    upright = Body(MESH, position=(1e-6, -2e-6, A + 0.3e-6))
+    one = adh.initial_state([upright])
+    tip = upright.position + adh.tips[7]
+    one["receptor"][0], one["anchor"][0] = 7, tip - [0.0, 0.0, 50e-9]
+    contacts = Contacts([upright], [MESH.size()], True, GapFinder())
+    vector, moment = adh.geometry(adh._table(one), adh._frame([upright], contacts, one))
+    force, torque, count = adh.reduce(adh._table(one)[0], moment, adh.tip_forces(vector.numpy()))
+    pull = np.array([0.0, 0.0, -5e-4 * 20e-9])
+    np.testing.assert_allclose(force[0], pull, rtol=0, atol=1e-12 * 1e-11)
+    arm = adh.tips[7]
+    np.testing.assert_allclose(torque[0], [arm[1] * pull[2], -arm[0] * pull[2], 0.0], rtol=0, atol=1e-12 * 1e-11 * A)
+    assert count[0] == 1
     x = rng.normal(0, 40e-9, (5, 3))
     for compression in (False, True):
         law = adhesion(compression=compression).law
