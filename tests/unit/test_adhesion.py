@@ -187,6 +187,40 @@ def test_formation_in_the_kernel_follows_eq_4_2():
     assert not np.array_equal(other["receptor"], first["receptor"])
 
 
+def test_a_hertz_patch_brings_more_receptors_within_reach_counted_on_the_host():
+    """Formation inside a Hertz patch (thesis ch. 4.2; forces/bond_model.py "Contact"): the tips
+    over a contact disc of radius a_s lie on the cell's flattened surface, Johnson's profile
+    (``hertz.surface_height``, host), so more of them come within the band lambda .. lambda +
+    layer of the wall than on the rigid sphere. Counted here from the tips' heights lowered on
+    the host (z + surface_height(rho) - rho^2 / 2 c, c = radius + roughness, rho from the closest
+    point of the cell to the wall), the expected formations of eq. 4.2 in one step, against the
+    kernel's mean over 200 draws, for a_s = 0 and 0.8 um: the patch gives over ten times the
+    rigid cell's."""
+    sigma, dt, rest, layer = 0.1, 1e-3, 30e-9, 50e-9
+    adh = adhesion(spring_constant=sigma, max_bonds=2000)
+    body = Body(MESH, position=(0, 0, A + 175e-9 + 55e-9))
+    contacts = Contacts([body], [MESH.size()], True, GapFinder())
+    centre = contacts.gap(0, -1).point
+    tips = body.position + adh.tips
+    curvature = MESH.equivalent_radius() + 175e-9
+    kt = BOLTZMANN * 310.0
+    expected = {}
+    for patch in (0.0, 0.8e-6):
+        rho = np.hypot(tips[:, 0] - centre[0], tips[:, 1] - centre[1])
+        lowering = (np.array([hertz.surface_height(r, patch, curvature) for r in rho]) - rho**2 / (2 * curvature)
+                    if patch > 0 else 0.0)
+        z = tips[:, 2] + lowering
+        d = np.abs(z - np.clip(z - rest, 0.0, layer) - rest)
+        p = 1 - np.exp(-365.0 * np.exp(sigma * d * (0.39e-10 - 0.5 * d) / kt) * dt)
+        start = adh.initial_state([body])
+        start["contact_radius"][0] = patch
+        counts = [adh.advance_state(dict(start, draws=np.array(float(draw))), [body], [body], contacts, dt, dt)["count"][0]
+                  for draw in range(200)]
+        assert abs(np.mean(counts) - p.sum()) < 4 * np.sqrt((p * (1 - p)).sum() / len(counts))
+        expected[patch] = p.sum()
+    assert expected[0.0] > 0.3 and expected[0.8e-6] > 10 * expected[0.0]  # 0.61 and 14.1 here
+
+
 @pytest.mark.parametrize("height", [50e-9, 20e-9])
 def test_on_a_ligand_plane_every_bond_forms_on_it_with_eq_4_2_at_its_own_stretch(height):
     """ligand_geometry = "plane" (forces/bond_model.py): a tip at height z binds the point straight
