@@ -22,7 +22,9 @@ Model, written down (SI):
   the distance beyond: the most binding-friendly rule, under which eq. 4.2's dependence on the
   stretch acts only outside that band. "plane" (ligands on the plane z = ``ligand_height``): the
   tip binds to the point straight below on the plane, its deviation d = z - h - lambda, eq. 4.2
-  as written, for every tip.
+  as written, for every tip. "layer" is the default: on the plane stiff bonds (100 dyn/cm) at
+  Table 4.1's parameters form one or two bonds in 10 ms and the cell passes, against the
+  thesis's capture (scenes/README.md, "Where the wall's ligands are": the runs side by side).
   With a finite ``ligand_density`` n_l the on-rate is scaled by min(1, n_l / n_r) (mean field:
   the share of receptors facing a free ligand).
 * Formation: k_f = k_f0 exp(sigma |d| (r0 - |d|/2) / kT) (eq. 4.2; d the deviation from lambda);
