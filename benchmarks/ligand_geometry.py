@@ -4,9 +4,9 @@ ligands spread through the wall's layer ("layer", a tip binds at its rest length
 
 Cases: thesis Table 4.1 with stiff (100 dyn/cm, fig4_04_06_stiff_bonds.toml) and soft bonds
 (0.5 dyn/cm, fig4_09_11_soft_bonds.toml), each a rigid cell and a compliant one (0.508 and
-4 kPa, the thesis's), 10 ms on the k = 3 sphere; and three points of the state diagram (state_diagram.toml, k_r0 = 1 /s at
-r0 = 0.3, 0.6 and 1.2 A: firm, rolling and no adhesion under the layer rule), 0.1 s. Each run is
-``warpbem run`` in a process of its own (two side by side with ``--workers 2``), its file kept
+4 kPa, the thesis's), 10 ms on the k = 3 sphere; and three points of the state diagram
+(state_diagram.toml, k_r0 = 1 /s at r0 = 0.3, 0.6 and 1.2 A: firm, rolling and no adhesion
+under the layer rule), 0.1 s. Each run is ``warpbem run`` in a process of its own (two side by side with ``--workers 2``), its file kept
 under ``--output-dir`` (a finished one is read, not run again; an interrupted one resumes).
 Per run: the time of the first bond (capture), bonds at the end, the mean velocity over the last
 half (a line fitted to x(t)), the state (``warpbem/app/adhesion_states.py``) and the wall time.
@@ -129,8 +129,8 @@ def main():
         for job, wall in zip(jobs, pool.map(lambda j: run(*j, args.output_dir), jobs)):
             walls[job], done = wall, done + 1
             elapsed = time.perf_counter() - start
-            print(f"{done} / {len(jobs)}  {job[0]} ({job[1]}): {wall:.0f} s;  ETA {elapsed / done * (len(jobs) - done):.0f} s",
-                  flush=True)
+            eta = elapsed / done * (len(jobs) - done)
+            print(f"{done} / {len(jobs)}  {job[0]} ({job[1]}): {wall:.0f} s;  ETA {eta:.0f} s", flush=True)
     rows = [measure(label, rule, args.output_dir / file_name(label, rule), walls[(label, rule)])
             for label, rule in jobs]
     keys = list(rows[0])

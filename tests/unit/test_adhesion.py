@@ -214,8 +214,8 @@ def test_a_hertz_patch_brings_more_receptors_within_reach_counted_on_the_host():
         p = 1 - np.exp(-365.0 * np.exp(sigma * d * (0.39e-10 - 0.5 * d) / kt) * dt)
         start = adh.initial_state([body])
         start["contact_radius"][0] = patch
-        counts = [adh.advance_state(dict(start, draws=np.array(float(draw))), [body], [body], contacts, dt, dt)["count"][0]
-                  for draw in range(200)]
+        counts = [adh.advance_state(dict(start, draws=np.array(float(draw))), [body], [body], contacts, dt,
+                                    dt)["count"][0] for draw in range(200)]
         assert abs(np.mean(counts) - p.sum()) < 4 * np.sqrt((p * (1 - p)).sum() / len(counts))
         expected[patch] = p.sum()
     assert expected[0.0] > 0.3 and expected[0.8e-6] > 10 * expected[0.0]  # 0.61 and 14.1 here
