@@ -54,7 +54,8 @@ class DenseOperator(DiscreteOperator):
         moved = np.flatnonzero(~kept)
         kept_rows, moved_rows = self.geometry.points_of(np.flatnonzero(kept)), self.geometry.points_of(moved)
         # rows: collocation points; columns: elements, each filling the columns of its points
-        for rows, cols in ((moved_rows, np.arange(self.geometry.n_elements)), (kept_rows, self.geometry.elements_of(moved))):
+        every_element = np.arange(self.geometry.n_elements)
+        for rows, cols in ((moved_rows, every_element), (kept_rows, self.geometry.elements_of(moved))):
             if len(rows) and len(cols):
                 integrals.assemble_entries(self.kernels, self.device, self.surface, rows, cols, matrix)
         if self.device.is_cpu:
