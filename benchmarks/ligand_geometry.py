@@ -8,9 +8,10 @@ Cases: thesis Table 4.1 with stiff (100 dyn/cm, fig4_04_06_stiff_bonds.toml) and
 (state_diagram.toml, k_r0 = 1 /s at r0 = 0.3, 0.6 and 1.2 A: firm, rolling and no adhesion
 under the layer rule), 0.1 s. Each run is ``warpbem run`` in a process of its own (two side by
 side with ``--workers 2``), its file kept under ``--output-dir`` (a finished one is read, not run
-again; an interrupted one resumes). Per run: the time of the first bond (capture), bonds at the end, the mean velocity over the last
-half (a line fitted to x(t)), the state (``warpbem/app/adhesion_states.py``) and the wall time.
-A table is printed, a CSV and a chart written.
+again; an interrupted one resumes). Per run: the time of the first bond (capture), bonds at the
+end, the mean velocity over the last half (a line fitted to x(t)), the state
+(``warpbem/app/adhesion_states.py``) and the wall time. A table is printed, a CSV and a chart
+written.
 
     python benchmarks/ligand_geometry.py --workers 2
 """
