@@ -268,3 +268,31 @@ def test_a_free_cell_binds_to_ligands_on_an_adherent_cell():
     np.testing.assert_allclose(frame.loads["bond"].force[1], -frame.loads["bond"].force[0], rtol=1e-12,
                                atol=1e-12 * np.abs(frame.loads["bond"].force[0]).max())
     assert np.abs(frame.loads["bond"].force[0]).max() > 1e-12  # a stretched bond: above 1 pN
+
+
+@pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
+@pytest.mark.parametrize("changes, end, state", [(dict(off_rate=0.0), 0.03, "firm adhesion"),
+                                                 (dict(off_rate=50.0), 0.03, "rolling"),
+                                                 (dict(on_rate=0.0), 0.01, "no adhesion")])
+def test_the_state_classifier_on_short_real_runs(changes, end, state):
+    """The rule of warpbem/app/adhesion_states.py (Chang, Tees & Hammer 2000: the mean velocity
+    over the last half against the free one) on real runs of the 2 um cell in 100 1/s shear,
+    Table 4.1's soft bonds: bonds that never break (k_r0 = 0) hold it, firm adhesion; k_r0 =
+    50 /s lets it roll (V / V_free 0.24 here: bonds break as fast as they form at the rear); no
+    on-rate leaves it free, no adhesion (V / V_free 1)."""
+    from warpbem.app.adhesion_states import FIRM, FREE, classify
+
+    model = rolling_model(**changes)
+    sim = Simulator(model)
+    state_now = model.initial_state([[0.0, 0.0, A + REST_GAP]])
+    times, x, bonds, free = [], [], [], None
+    while state_now.time < end:
+        state_now, frame = sim.step(state_now)
+        times.append(state_now.time)
+        x.append(state_now.positions[0, 0])
+        bonds.append(frame.parts["bond"]["count"][0])
+        free = frame.velocity[0, 0] if free is None else free
+    found, ratio = classify(times, x, bonds, free)
+    assert found == state
+    if state == "rolling":
+        assert 2 * FIRM < ratio < FREE / 2  # well inside the band, not at a boundary
