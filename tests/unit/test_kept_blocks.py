@@ -32,12 +32,12 @@ def moving(position):
 def test_unmoved_bodies_keep_their_blocks_in_place_and_the_matrix_is_the_fresh_one():
     store = KeptBlocks()
     first = description([A, B, moving(FAR)]).discrete("dense", kept=store)
-    assert not first.reused_bodies.any()  # nothing held yet
     pointer = first.matrix().ptr
+    assert not first.reused_bodies.any()  # nothing was held
     moved = [A, B, moving((-4.5, 1.0, 2.5))]  # the moving cell keeps its element count
     second = description(moved).discrete("dense", kept=store)
-    assert second.reused_bodies.tolist() == [True, True, False]
     np.testing.assert_array_equal(second.to_dense(), fresh(moved))
+    assert second.reused_bodies.tolist() == [True, True, False]
     assert store.placement == "in place" and second.matrix().ptr == pointer
     # the first operator's matrix was taken: asked again, it assembles its own, afresh
     np.testing.assert_array_equal(first.to_dense(), fresh([A, B, moving(FAR)]))
@@ -52,8 +52,8 @@ def test_a_kept_block_moves_within_its_buffer_when_the_moving_cell_shrinks():
     pointer = near.matrix().ptr
     bodies = [moving(FAR), A, B]
     far = description(bodies).discrete("dense", kept=store)
-    assert far.size < near.size and far.reused_bodies.tolist() == [False, True, True]
     np.testing.assert_array_equal(far.to_dense(), fresh(bodies))
+    assert far.size < near.size and far.reused_bodies.tolist() == [False, True, True]
     assert store.placement == "moved" and far.matrix().ptr == pointer
 
 
@@ -65,8 +65,8 @@ def test_kept_blocks_are_gathered_into_a_new_matrix_where_they_cannot_move_in_pl
     pointer = first.matrix().ptr
     bodies = [A, moving(NEAR_WALL), B]
     second = description(bodies).discrete("dense", kept=store)
-    assert second.size > first.size and second.reused_bodies.tolist() == [True, False, True]
     np.testing.assert_array_equal(second.to_dense(), fresh(bodies))
+    assert second.size > first.size and second.reused_bodies.tolist() == [True, False, True]
     assert store.placement == "gathered" and second.matrix().ptr != pointer
     assert store.holds(second._lease) and not store.holds(first._lease)
 
@@ -75,10 +75,12 @@ def test_only_an_operator_of_the_same_kind_quadrature_and_precision_takes_kept_b
     store = KeptBlocks()
     bodies = [A, B, moving(FAR)]
     description(bodies).discrete("dense", kept=store).matrix()
-    assert description(bodies).discrete("dense", kept=store).reused_bodies.all()
+    same = description(bodies)
+    assert store.reusable_bodies(same.signature("cpu"), same.geometry).all()
     for other in (dict(kind="adjoint_double_layer"), dict(quadrature=QuadratureOptions(order=3)),
                   dict(dtype="float32")):
-        assert not description(bodies, **other).discrete("dense", kept=store).reused_bodies.any()
+        changed = description(bodies, **other)
+        assert not store.reusable_bodies(changed.signature("cpu"), changed.geometry).any()
     with pytest.raises(ValueError, match="holds no matrix"):
         KeptBlocks().take(description(bodies).signature("cpu"), description(bodies).geometry, np.ones(3, bool),
                           None, None)

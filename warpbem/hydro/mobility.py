@@ -204,15 +204,16 @@ class MobilitySolver:
         if background or self._last is None or system is not self._last[0]:
             self._last = (system, x, speed, key)
 
-        return MobilitySolution(*self._motion_and_loads(bodies, system, x, forces, torques, speed, length),
+        return MobilitySolution(*self._motion_and_loads(bodies, system, x, forces, torques, speed, length, force_scale),
                                 result.iterations, result.residual, result.converged, double_layer.mode, x,
                                 double_layer.reused_bodies)
 
-    def _motion_and_loads(self, bodies, system, x, forces, torques, speed: float, length: float):
-        """(velocity, angular velocity, force, torque) of every body, SI, from the solution x:
-        free bodies' rigid motion -P q and given loads, fixed ones' prescribed motion and the
-        loads their densities' rigid parts carry."""
-        force_scale = self.flow.viscosity * speed * length
+    @staticmethod
+    def _motion_and_loads(bodies, system, x, forces, torques, speed: float, length: float, force_scale: float):
+        """(velocity, angular velocity, force, torque) of every body, SI, from the solution x in
+        the scales ``speed`` (m/s), ``length`` (m) and ``force_scale`` (N): free bodies' rigid
+        motion -P q and given loads, fixed ones' prescribed motion and the loads their
+        densities' rigid parts carry."""
         velocity = np.zeros((len(bodies), 3))
         angular_velocity = np.zeros((len(bodies), 3))
         force, torque = forces.copy(), torques.copy()

@@ -17,7 +17,7 @@ from .kept_blocks import KeptBlocks, new_buffer, square
 class DenseOperator(DiscreteOperator):
     """The assembled matrix of ``description`` on ``device``, assembled at its first use;
     ``kept``: the store it takes unmoved bodies' blocks from and leaves its matrix in.
-    ``reused_bodies``: per body, whether its blocks came (or will come) from the store."""
+    ``reused_bodies``: per body, whether its blocks came from the store (set when it assembles)."""
 
     mode = "dense"
 
@@ -25,8 +25,6 @@ class DenseOperator(DiscreteOperator):
         super().__init__(description, device, point_sources)
         self._store = kept
         self._signature = description.signature(self.device)
-        self.reused_bodies = (kept.reusable_bodies(self._signature, self.geometry) if kept is not None
-                              else np.zeros(len(self.geometry.body_ranges), dtype=bool))
         self._lease = None  # of the store's matrix while this operator's is held there
         self._buffer = None  # its own matrix, when not in a store
 

@@ -15,7 +15,10 @@ class DirectSumOperator(DiscreteOperator):
 
     mode = "matrix_free"
 
+    def __init__(self, description, device, point_sources=None):
+        super().__init__(description, device, point_sources)
+        self.device_lists("direct", integrals.every_item(self.geometry.n_points, self.geometry.n_elements))
+
     def apply(self, density: np.ndarray, pole_forces: np.ndarray | None = None) -> np.ndarray:
         self._refuse_pole_forces(pole_forces)
-        every = self.device_lists("direct", integrals.every_item(self.geometry.n_points, self.geometry.n_elements))
-        return self._listed_sum(density, every)
+        return self._listed_sum(density, self._lists["direct"])

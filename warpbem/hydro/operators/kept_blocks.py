@@ -3,9 +3,9 @@ of bodies whose elements did not change (fixed adherent cells: "model no more th
 needs"), so that a time-stepping run reassembles only the rows and columns of its moving cells
 and holds one matrix, not two.
 
-A ``DenseOperator`` built with a store asks it at construction which bodies it can keep
+A ``DenseOperator`` built with a store asks it, when it assembles, which bodies it can keep
 (``reusable_bodies``: same elements, same kernel, quadrature, precision and device, the
-``BoundaryOperator.signature``); when it assembles, it ``take``s the held matrix with those
+``BoundaryOperator.signature``), ``take``s the held matrix with those
 bodies' blocks placed for its own layout, fills in the rest and ``hold``s the result. The held
 matrix is placed, cheapest first:
 
@@ -61,21 +61,19 @@ class KeptBlocks:
     def release(self) -> None:
         """Drop the held matrix (its memory goes when no operator view of it remains)."""
         self._lease = self._buffer = self._geometry = self._signature = None
-        self._size = 0
 
     @property
     def holding(self) -> bool:
         return self._buffer is not None
 
+    @property
+    def _size(self) -> int:
+        """Rows of the held matrix: three per collocation point of its geometry."""
+        return 3 * self._geometry.n_points
+
     def holds(self, lease) -> bool:
         """Whether the held matrix is the one of ``lease``'s holder."""
         return lease is not None and lease is self._lease
-
-    def matrix(self, lease):
-        """The held (size, size) matrix, for its holder."""
-        if not self.holds(lease):
-            raise ValueError("this store holds another operator's matrix")
-        return square(self._buffer, self._size)
 
     def buffer(self, lease):
         if not self.holds(lease):
@@ -113,7 +111,6 @@ class KeptBlocks:
         """Hold the matrix of an operator of ``signature`` over ``geometry`` in ``buffer``; its
         lease, which the previous holder's no longer matches."""
         self._lease, self._buffer, self._geometry, self._signature = Lease(), buffer, geometry, signature
-        self._size = 3 * geometry.n_points
         return self._lease
 
     def _move_block(self, kept, old, new, size: int, device) -> bool:
