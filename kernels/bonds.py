@@ -179,11 +179,14 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
     @wp.kernel(enable_backward=False)
     def insert(first: int, candidate: wp.array(dtype=int), anchor: wp.array(dtype=vec3), offset: wp.array(dtype=dtype),
                partner: wp.array(dtype=int), receptor_start: wp.array(dtype=int), capacity: int, time: dtype,
+               replace: int, seed: int, draw: int, n_receptors: int,
                bond_receptor: wp.array(dtype=int), bond_anchor: wp.array(dtype=vec3),
                bond_offset: wp.array(dtype=dtype), bond_partner: wp.array(dtype=int),
                bond_birth: wp.array(dtype=dtype), bound: wp.array(dtype=int)):
         """New bonds into each cell's free rows, receptors in index order, up to ``capacity``
-        bonds per cell (the cap of thesis figs. 4.12-4.14: the rest are refused)."""
+        bonds per cell (the cap of thesis figs. 4.12-4.14); past it a new bond is refused, or with
+        ``replace`` takes a row drawn uniformly from the cell's (counter n_receptors + r of the
+        formation's draw, so the formation's own draws are untouched), whose bond breaks."""
         c = first + wp.tid()
         row = c * capacity
         end = (c + 1) * capacity
@@ -191,12 +194,17 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
             if candidate[r] != 0:
                 while row < end and bond_receptor[row] >= 0:
                     row += 1
-                if row < end:
-                    bond_receptor[row] = r
-                    bond_anchor[row] = anchor[r]
-                    bond_offset[row] = offset[r]
-                    bond_partner[row] = partner[r]
-                    bond_birth[row] = time
+                slot = row
+                if row >= end and replace != 0:
+                    slot = c * capacity + wp.min(int(uniform(seed, draw, n_receptors + r) * dtype(capacity)),
+                                                 capacity - 1)
+                    bound[bond_receptor[slot]] = 0
+                if slot < end:
+                    bond_receptor[slot] = r
+                    bond_anchor[slot] = anchor[r]
+                    bond_offset[slot] = offset[r]
+                    bond_partner[slot] = partner[r]
+                    bond_birth[slot] = time
                     bound[r] = 1
 
     @wp.kernel(enable_backward=False)
@@ -255,7 +263,10 @@ def formation(kernels, device, n: int, bound, tips, receptor_body, positions, ro
 
 
 def insert(kernels, device, n: int, candidate, anchor, offset, partner, receptor_start, capacity: int, time,
-           bond_receptor, bond_anchor, bond_offset, bond_partner, bond_birth, bound):
-    """The new bonds of the n adhesive cells into their table rows, and ``bound`` set."""
+           replace: bool, seed: int, draw: int, bond_receptor, bond_anchor, bond_offset, bond_partner, bond_birth,
+           bound):
+    """The new bonds of the n adhesive cells into their table rows (past the cap refused, or with
+    ``replace`` in the place of a bond drawn from the formation's ``draw``), and ``bound`` set."""
     _launch(kernels.insert, device, n, [candidate, anchor, offset, partner, receptor_start, capacity, time,
-                                        bond_receptor, bond_anchor, bond_offset, bond_partner, bond_birth, bound])
+                                        int(replace), seed, draw, candidate.shape[0], bond_receptor, bond_anchor,
+                                        bond_offset, bond_partner, bond_birth, bound])

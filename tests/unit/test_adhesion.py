@@ -261,6 +261,33 @@ def test_cap_on_bonds_per_cell():
     assert part["count"][0] == 5 and np.sum(part["receptor"] >= 0) == 5
 
 
+@pytest.mark.filterwarnings("ignore::warpbem.DeformationWarning")
+def test_at_the_cap_a_new_bond_is_refused_or_replaces_one_drawn_from_the_table():
+    """cap_rule (forces/bond_model.py; the thesis's cap, L910, "broke any additional bonds that
+    attempted to form"): with no rupture (k_r0 = 0) and every receptor within reach forming in
+    a step (k_f0 dt = 10), "refuse" keeps the first five bonds for good; "replace" turns the
+    table over, each new bond in a row drawn uniformly: after a step in which the n receptors
+    within reach all form again (n >> 5), a kept bond survives one of the n - 5 insertions
+    with probability 4/5, so of the five, about 5 (4/5)^(n - 5) remain: none for n of 30 and
+    more. The cap holds under both, and every receptor of the table is marked bound once."""
+    body = Body(MESH, position=(0, 0, A + 0.2e-6))
+    contacts = Contacts([body], [MESH.size()], True, GapFinder())
+    rows = {}
+    for rule in ("refuse", "replace"):
+        adh = adhesion(spring_constant=1e-9, on_rate=1e4, off_rate=0.0, max_bonds=5, cap_rule=rule)
+        first = adh.advance_state(adh.initial_state([body]), [body], [body], contacts, 1e-3, 1e-3)
+        second = adh.advance_state({**first, "draws": first["draws"] + 1}, [body], [body], contacts, 1e-3, 2e-3)
+        for part in (first, second):
+            assert part["count"][0] == 5 and len(set(part["receptor"][part["receptor"] >= 0])) == 5
+        rows[rule] = set(first["receptor"]), set(second["receptor"])
+    z = body.position[2] + adhesion().tips[:, 2]  # eq. 4.2 on the host: the layer rule, the rigid cell
+    d = np.abs(z - np.clip(z - 30e-9, 0.0, 50e-9) - 30e-9)
+    within_reach = np.count_nonzero(1e4 * np.exp(1e-9 * d * (0.39e-10 - 0.5 * d) / (BOLTZMANN * 310.0)) * 1e-3 > 5)
+    assert within_reach >= 30
+    assert rows["refuse"][0] == rows["refuse"][1]
+    assert len(rows["replace"][0] & rows["replace"][1]) <= 1
+
+
 BONDS = """
 [flow]
 shear_rate = 100.0

@@ -278,7 +278,8 @@ def test_the_gaps_leave_out_the_cells_own_contact_loads_with_the_fluids_answer_t
     to the load with the fluid's answer to it (the film's pressure under the cell, which moves it
     as much as the load itself does): left in the gaps, it closed a loop of gain ~ bond
     stiffness x the cell's compliance there (0.1 N/m x ~400 m/N) that threw a tethered 0.5 kPa
-    cell off its bonds within 0.8 ms (repulsion 2.7 nN, vertical velocity 1.3 mm/s; measured)."""
+    cell off its bonds within 0.8 ms (repulsion 2.7 nN, vertical velocity 1.3 mm/s; measured).
+    With ``own_loads_in_gaps`` the displacement is the same and none of it is left out."""
     from warpbem.forces.interaction import Loads
     from warpbem.surfaces.body import Body
     from warpbem.surfaces.gaps import WALL
@@ -302,3 +303,11 @@ def test_the_gaps_leave_out_the_cells_own_contact_loads_with_the_fluids_answer_t
     assert np.abs(c1).max() > np.abs(u1 - c1).max() > 0  # 8.0 nm from the bond, 4.2 nm from the flow
     np.testing.assert_allclose(u3 - c3, u1 - c1, rtol=0, atol=1e-6 * np.abs(c1).max())
     assert 2.0 < np.abs(c3).max() / np.abs(c1).max() < 3.0  # sub-linear: the Hertz patch widens as F^(1/3)
+    # own_loads_in_gaps (the thesis's one shape): the same displacement, none of it left out
+    counted = Deformation([True], [500.0], [0.33], DeformationOptions(relaxation=False, own_loads_in_gaps=True))
+    bond = np.array([-3e-11, 0.0, -1e-10])
+    loads = Loads(np.array([[0.0, 0.0, -2e-13]]) + bond, np.cross(point - body.position, bond)[None])
+    part = counted.bound(model, "cpu").advance_shape(state.parts["deformation"], [body], loads, [body.orientation],
+                                                     1e-5, [(0, WALL, point, bond)])
+    np.testing.assert_allclose(part["node_displacement"][0], u1, rtol=0, atol=1e-4 * np.abs(c1).max())
+    assert not part["contact_displacement"].any()

@@ -46,6 +46,14 @@ and bond loads act at their points (``ImplicitCoordinates.point_loads``), spread
 Hertz patch (eq. 4.8-4.9, ``forces/hertz.py``); receptors ride on the surface point under them,
 and the Hertz patch of the bonds' normal force still flattens the tips inside it, as on rigid
 cells. Mobility snapshots serve a state while max |u| is within their tolerance (``keeps_shape``).
+``own_loads_in_gaps = True`` counts that response in the gaps and the slip as well (one shape
+for the flow and the contacts, and no extra solve).
+
+The thesis's step (ch. 2.2 C, eq. 2.25-2.31) is each step's traction on the shape at the
+instant, solved as a rigid body, turned into the displacement by the interior problem and
+taken as the new shape, one shape for everything: ``relaxation = False``, ``surface_velocity =
+False``, ``own_loads_in_gaps = True``. Each of the three switches undoes one of this model's
+additions to it (scenes/README.md, "The deformable model's additions, one at a time").
 
 Assumptions and limits. Linear elasticity (small strains: D << 1). tau is the sphere's for its
 l = 2 mode in unbounded fluid (other modes and shapes, and the wall, change the resistance); the
@@ -117,6 +125,9 @@ class DeformationOptions:
                                     " shape moves rigidly at the instant)")
     update_interval: int = option(1, "steps between traction and elastic solves (relaxing towards the kept target"
                                   " in between)", low=1, high=1e6)
+    own_loads_in_gaps: bool = option(False, "the contact laws' gaps and the surface's slip include the cell's response"
+                                     " to its own contact, bond and body loads (true: one shape for all, as the"
+                                     " thesis's; false: left out, a step-late loop otherwise)")
 
     def __post_init__(self):
         validate(self)
@@ -174,7 +185,7 @@ class BoundDeformation(BoundInteraction):
         self.shear_modulus, self.poisson_ratio = list(interaction.shear_modulus), list(interaction.poisson_ratio)
         options = interaction.options
         self.relaxation, self.update_interval = options.relaxation, options.update_interval
-        self.surface_velocity = options.surface_velocity
+        self.surface_velocity, self.own_loads_in_gaps = options.surface_velocity, options.own_loads_in_gaps
         self.max_nodes = max(len(m.nodes) for m in self.meshes)
         self.radii = [m.equivalent_radius() for m in self.meshes]  # m: the Hertz curvatures, the amplitude scale
         self._warned = set()  # (body, kind) already reported, once per binding
@@ -318,7 +329,8 @@ class BoundDeformation(BoundInteraction):
                     and radius**2 / self.radii[body] > UNRESOLVED_APPROACH):
                 self._warn_once(body, "patch", f"body {body}: its contact patch (Hertz radius {radius:.2g} m) is"
                                 " narrower than its elements: the mesh, not Hertz, sets the contact's flattening")
-        loaded = {body for body, _, _, _ in spread}
+        # the cells whose own loads' response the gaps leave out (module docstring: contacts)
+        loaded = set() if self.own_loads_in_gaps else {body for body, _, _, _ in spread}
         flow = self.model.flow
         traction = solve_traction(start_bodies, flow.shear_rate, flow.viscosity, flow.wall,
                                   force, torque, self.device, point_loads=spread,

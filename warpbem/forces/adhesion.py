@@ -355,7 +355,8 @@ class BoundAdhesion(BondLaws, BoundInteraction):
             wp.array(cell_partner, dtype=int, device=self.device), candidate, ligand, lowering, chosen)
         partner = wp.array(part["partner"].astype(np.int32), dtype=int, device=self.device)
         bonds.insert(k, self.device, len(self.cells), candidate, ligand, lowering, chosen, self._receptor_start,
-                     self.max_bonds, end_time, receptor, anchor, offset, partner, birth, bound)
+                     self.max_bonds, end_time, self.cap_rule == "replace", self.seed, 2 * draw + 1, receptor, anchor,
+                     offset, partner, birth, bound)
         vector, moment = self.geometry(table, frame)
         on_wall = (partner.numpy() < 0)[:, None]
         force, _, count = self.reduce(receptor, moment, self.tip_forces(vector.numpy()) * on_wall)

@@ -44,7 +44,12 @@ Model, written down (SI):
   receptors inside the contact area are those within reach. Before any bond has formed a_s = 0
   and the receptors within reach are those of the cap that comes within lambda + layer of the
   wall (the thesis's first-step anchoring). Rigid cells (no shear modulus) keep a_s = 0.
-* Cap: at most ``max_bonds`` per cell, which is also the size of each cell's bond table.
+* Cap: at most ``max_bonds`` per cell, which is also the size of each cell's bond table. The
+  thesis's cap (figs. 4.12-4.14, L910) "broke any additional bonds that attempted to form" and
+  calls the result "artificially induced bond rupture" that makes the rolling noisy; refusing
+  a bond breaks none, so ``cap_rule`` offers both readings: "refuse" (the default: a bond that
+  would form on a full cell does not) and "replace" (it forms in the place of one of the cell's
+  bonds, drawn uniformly, which breaks: the table turns over at the formation rate).
 """
 
 from __future__ import annotations
@@ -59,6 +64,7 @@ from ..surfaces import quad9
 
 BOLTZMANN = 1.380649e-23  # J/K
 LIGAND_GEOMETRIES = ("layer", "plane")  # BondOptions.ligand_geometry
+CAP_RULES = ("refuse", "replace")  # BondOptions.cap_rule
 
 
 @dataclass(frozen=True)
@@ -81,6 +87,9 @@ class BondOptions:
     temperature: float = option(310.0, "absolute temperature T (k T in eq. 4.1-4.2)", "K", low=0.0, high=1e4,
                                 low_open=True)
     max_bonds: int = option(100, "cap of bonds per cell (the size of its bond table)", low=1, high=1e5)
+    cap_rule: str = option("refuse", "what a bond that forms on a cell at its cap does: refuse (it does not form) or"
+                           " replace (it takes the place of one of the cell's bonds drawn at random, which breaks)",
+                           choices=CAP_RULES)
     compression: bool = option(False, "bonds resist compression too (false: a compressed bond is slack)")
     seed: int = option(0, "seed of the receptors' placement and the bond Monte Carlo", low=0, high=2**31 - 1)
     roughness: float | None = option(None, "tip height of the receptors above the surface. Default: the repulsion's"
