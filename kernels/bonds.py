@@ -41,6 +41,7 @@ import warp as wp
 from .launch import launch_rows
 
 SPLIT_THREADS = 4096  # launches at least this long are split over the CPU threads
+MAX_SITES = 32  # ligand sites per lattice square at most (mean 1: P(n > 32) ~ 1e-37)
 
 
 @functools.lru_cache(maxsize=None)
@@ -71,6 +72,36 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
     def uniform(seed: int, draw: int, index: int):
         state = wp.rand_init(wp.int32(wp.rand_init(seed, draw)), index)
         return dtype(wp.randf(state))
+
+    @wp.func
+    def site_uniform(seed: int, ix: int, iy: int, k: int):
+        """The k-th uniform number of ligand lattice square (ix, iy): a hash of the four."""
+        return dtype(wp.randf(wp.rand_init(wp.int32(wp.rand_init(wp.int32(wp.rand_init(seed, ix)), iy)), k)))
+
+    @wp.func
+    def site_count(seed: int, ix: int, iy: int, mean: dtype):
+        """Poisson number of ligand sites in lattice square (ix, iy), by inversion of its CDF."""
+        u = site_uniform(seed, ix, iy, 0)
+        p = wp.exp(-mean)
+        cumulative = p
+        n = int(0)
+        while u > cumulative and n < MAX_SITES:
+            n += 1
+            p = p * mean / dtype(n)
+            cumulative += p
+        return n
+
+    @wp.func
+    def site_taken(row: int, capacity: int, bond_receptor: wp.array(dtype=int), bond_anchor: wp.array(dtype=vec3),
+                   bond_partner: wp.array(dtype=int), site: vec3):
+        """1 if one of the ``capacity`` table rows from ``row`` holds a wall bond on ``site``."""
+        taken = int(0)
+        for i in range(row, row + capacity):
+            if bond_receptor[i] >= 0 and bond_partner[i] < 0:
+                a = bond_anchor[i]
+                if a[0] == site[0] and a[1] == site[1] and a[2] == site[2]:
+                    taken = 1
+        return taken
 
     @wp.kernel(enable_backward=False)
     def bond_geometry(first: int, bond_receptor: wp.array(dtype=int), bond_anchor: wp.array(dtype=vec3),
@@ -140,6 +171,9 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
                   compliance: dtype, on_rate: dtype, dt: dtype, seed: int, draw: int,
                   cell_anchor: wp.array(dtype=vec3), cell_deviation: wp.array(dtype=dtype),
                   cell_partner: wp.array(dtype=int),
+                  sites: int, site_density: dtype, site_spacing: dtype, site_seed: int, site_deviation: dtype,
+                  receptor_cell: wp.array(dtype=int), capacity: int, bond_receptor: wp.array(dtype=int),
+                  bond_anchor: wp.array(dtype=vec3), bond_partner: wp.array(dtype=int),
                   candidate: wp.array(dtype=int), anchor: wp.array(dtype=vec3), offset: wp.array(dtype=dtype),
                   partner: wp.array(dtype=int)):
         """Formation (eq. 4.2): k_f = k_f0 exp(sigma |d| (r0 - |d| / 2) / kT), d the deviation from
@@ -148,7 +182,12 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
         equal: forces/bond_model.py), so a tip at height z finds one straight below at z - lambda,
         clamped to them; or, if closer to its rest length, the best ligand on a
         ligand-bearing fixed cell (``cell_anchor``, ``cell_deviation``, ``cell_partner``: the
-        body, -1 for none; found by ``closest_to_points``); formed with 1 - exp(-k_f dt)."""
+        body, -1 for none; found by ``closest_to_points``); formed with 1 - exp(-k_f dt).
+        With ``sites`` the wall's ligands are the points of a Poisson process of density
+        ``site_density`` on the plane z = ``ligand_low``, ``site_count`` per square of a lattice
+        of ``site_spacing``, each holding one bond: the tip's rate is the sum of eq. 4.2 over the
+        free sites (and the cell's ligand) within ``site_deviation`` of its rest length, the one
+        it binds drawn in proportion to its rate (one pass: a weighted reservoir)."""
         r = first + wp.tid()
         candidate[r] = 0
         if bound[r] != 0:
@@ -159,6 +198,46 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
         rho = wp.sqrt((tip[0] - c[0]) * (tip[0] - c[0]) + (tip[1] - c[1]) * (tip[1] - c[1]))
         lowering = hertz_lowering(rho, patch_radius[b], curvature[b])
         tip = tip + vec3(zero, zero, lowering)
+        if sites != 0:
+            # counter 2 n + r: past the formation's (r) and the cap's (n + r, ``insert``)
+            pick = wp.rand_init(wp.int32(wp.rand_init(seed, draw)), 2 * bound.shape[0] + r)
+            total = zero
+            on_site = int(0)
+            site = vec3(zero, zero, ligand_low)
+            if cell_partner[r] >= 0:
+                d = wp.abs(cell_deviation[r])
+                total = on_rate * wp.exp(spring_per_kt * d * (compliance - half * d))
+            dz = tip[2] - ligand_low
+            window = rest + site_deviation
+            if wp.abs(dz) < window:
+                row = receptor_cell[r] * capacity
+                for ix in range(int(wp.floor((tip[0] - window) / site_spacing)),
+                                int(wp.floor((tip[0] + window) / site_spacing)) + 1):
+                    for iy in range(int(wp.floor((tip[1] - window) / site_spacing)),
+                                    int(wp.floor((tip[1] + window) / site_spacing)) + 1):
+                        for k in range(site_count(site_seed, ix, iy, site_density * site_spacing * site_spacing)):
+                            point = vec3((dtype(ix) + site_uniform(site_seed, ix, iy, 2 * k + 1)) * site_spacing,
+                                         (dtype(iy) + site_uniform(site_seed, ix, iy, 2 * k + 2)) * site_spacing,
+                                         ligand_low)
+                            d = wp.abs(wp.length(tip - point) - rest)
+                            if d < site_deviation:
+                                if site_taken(row, capacity, bond_receptor, bond_anchor, bond_partner, point) == 0:
+                                    w = on_rate * wp.exp(spring_per_kt * d * (compliance - half * d))
+                                    total += w
+                                    if dtype(wp.randf(pick)) * total < w:
+                                        on_site = 1
+                                        site = point
+            if uniform(seed, draw, r) < one - wp.exp(-total * dt):
+                candidate[r] = 1
+                if on_site == 0:
+                    anchor[r] = cell_anchor[r]
+                    offset[r] = zero
+                    partner[r] = cell_partner[r]
+                else:
+                    anchor[r] = site
+                    offset[r] = lowering
+                    partner[r] = -1
+            return
         height = wp.clamp(tip[2] - rest, ligand_low, ligand_high)
         d = wp.abs(tip[2] - height - rest)
         on_cell = cell_partner[r] >= 0 and wp.abs(cell_deviation[r]) < d
@@ -179,19 +258,23 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
     @wp.kernel(enable_backward=False)
     def insert(first: int, candidate: wp.array(dtype=int), anchor: wp.array(dtype=vec3), offset: wp.array(dtype=dtype),
                partner: wp.array(dtype=int), receptor_start: wp.array(dtype=int), capacity: int, time: dtype,
-               replace: int, seed: int, draw: int, n_receptors: int,
+               replace: int, seed: int, draw: int, n_receptors: int, sites: int,
                bond_receptor: wp.array(dtype=int), bond_anchor: wp.array(dtype=vec3),
                bond_offset: wp.array(dtype=dtype), bond_partner: wp.array(dtype=int),
                bond_birth: wp.array(dtype=dtype), bound: wp.array(dtype=int)):
         """New bonds into each cell's free rows, receptors in index order, up to ``capacity``
         bonds per cell (the cap of thesis figs. 4.12-4.14); past it a new bond is refused, or with
         ``replace`` takes a row drawn uniformly from the cell's (counter n_receptors + r of the
-        formation's draw, so the formation's own draws are untouched), whose bond breaks."""
+        formation's draw, so the formation's own draws are untouched), whose bond breaks. With
+        ``sites`` a wall site another receptor of the cell took in this step is refused."""
         c = first + wp.tid()
         row = c * capacity
         end = (c + 1) * capacity
         for r in range(receptor_start[c], receptor_start[c + 1]):
-            if candidate[r] != 0:
+            taken = int(0)
+            if candidate[r] != 0 and sites != 0 and partner[r] < 0:
+                taken = site_taken(c * capacity, capacity, bond_receptor, bond_anchor, bond_partner, anchor[r])
+            if candidate[r] != 0 and taken == 0:
                 while row < end and bond_receptor[row] >= 0:
                     row += 1
                 slot = row
@@ -214,7 +297,8 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
         if r >= 0:
             bound[r] = 1
 
-    return SimpleNamespace(vec3=vec3, mat33=mat33, hertz_lowering=hertz_lowering, bond_geometry=bond_geometry,
+    return SimpleNamespace(vec3=vec3, mat33=mat33, hertz_lowering=hertz_lowering, site_uniform=site_uniform,
+                           site_count=site_count, bond_geometry=bond_geometry,
                            reduce_per_cell=reduce_per_cell,
                            rupture=rupture, formation=formation, insert=insert, mark_bound=mark_bound)
 
@@ -254,19 +338,23 @@ def mark_bound(kernels, device, n: int, bond_receptor, bound):
 
 def formation(kernels, device, n: int, bound, tips, receptor_body, positions, rotations, patch_centre, patch_radius,
               curvature, rest, ligand_low, ligand_high, spring_per_kt, compliance, on_rate, dt, seed: int,
-              draw: int, cell_anchor, cell_deviation, cell_partner, candidate, anchor, offset, partner):
-    """``candidate``, ``anchor``, ``offset`` and ``partner`` of the n receptors."""
+              draw: int, cell_anchor, cell_deviation, cell_partner, sites, receptor_cell, capacity: int,
+              bond_receptor, bond_anchor, bond_partner, candidate, anchor, offset, partner):
+    """``candidate``, ``anchor``, ``offset`` and ``partner`` of the n receptors; ``sites``: None, or
+    (density 1/m^2, lattice spacing m, seed, deviation m) of the wall's ligand sites."""
+    site = (0, 0.0, 1.0, 0, 0.0) if sites is None else (1, *sites)
     _launch(kernels.formation, device, n, [bound, tips, receptor_body, positions, rotations, patch_centre,
                                            patch_radius, curvature, rest, ligand_low, ligand_high, spring_per_kt,
                                            compliance, on_rate, dt, seed, draw, cell_anchor, cell_deviation,
-                                           cell_partner, candidate, anchor, offset, partner])
+                                           cell_partner, *site, receptor_cell, capacity, bond_receptor,
+                                           bond_anchor, bond_partner, candidate, anchor, offset, partner])
 
 
 def insert(kernels, device, n: int, candidate, anchor, offset, partner, receptor_start, capacity: int, time,
-           replace: bool, seed: int, draw: int, bond_receptor, bond_anchor, bond_offset, bond_partner, bond_birth,
-           bound):
+           replace: bool, seed: int, draw: int, sites: bool, bond_receptor, bond_anchor, bond_offset, bond_partner,
+           bond_birth, bound):
     """The new bonds of the n adhesive cells into their table rows (past the cap refused, or with
     ``replace`` in the place of a bond drawn from the formation's ``draw``), and ``bound`` set."""
     _launch(kernels.insert, device, n, [candidate, anchor, offset, partner, receptor_start, capacity, time,
-                                        int(replace), seed, draw, candidate.shape[0], bond_receptor, bond_anchor,
-                                        bond_offset, bond_partner, bond_birth, bound])
+                                        int(replace), seed, draw, candidate.shape[0], int(sites), bond_receptor,
+                                        bond_anchor, bond_offset, bond_partner, bond_birth, bound])

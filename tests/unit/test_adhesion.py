@@ -252,6 +252,67 @@ def test_on_a_ligand_plane_every_bond_forms_on_it_with_eq_4_2_at_its_own_stretch
     assert abs(counts.mean() - p.sum()) < 4 * np.sqrt((p * (1 - p)).sum() / len(counts))
 
 
+def site_integral(dz, sigma, rate_dt, rest=30e-9, compliance=0.39e-10, kt=BOLTZMANN * 310.0):
+    """int (1 - exp(-k_f dt)) dA over the plane (m^2), k_f of eq. 4.2 at d = |sqrt(dz^2 + rho^2) -
+    lambda| for a tip dz above it, k_f0 dt = ``rate_dt``: by quadrature, split at the ring d = 0."""
+    from scipy.integrate import quad
+
+    reach = rest + 20 * np.sqrt(kt / sigma)
+    ring = np.sqrt(max(rest**2 - dz**2, 0.0))
+
+    def integrand(rho):
+        d = abs(np.hypot(dz, rho) - rest)
+        return -np.expm1(-rate_dt * np.exp(sigma * d * (compliance - 0.5 * d) / kt)) * 2 * np.pi * rho
+
+    return sum(quad(integrand, a, b, limit=200)[0] for a, b in ((0.0, ring), (ring, reach)) if b > a)
+
+
+def test_ligand_sites_bind_at_the_rate_of_eq_4_2_summed_over_a_poisson_wall_of_their_density():
+    """ligand_geometry = "sites" (forces/bond_model.py): the wall's ligands are the points of a
+    Poisson process of density n_l on the plane z = h, and a tip binds at eq. 4.2's rate summed
+    over them, with 1 - exp(-K dt). Over walls (a seed each), a tip then binds in a step with
+    probability 1 - exp(-n_l int (1 - exp(-k_f dt)) dA), the Laplace functional of the Poisson
+    process (Kingman 1993, Poisson Processes, ch. 3), the integral taken here by quadrature,
+    independent of the kernel's lattice: the kernel's mean count over 30 walls against that
+    sum over the tips, at two densities (the rate grows with n_l, not only up to a cap), within
+    4 standard errors and 3 % (two tips taking one site in a step, which the kernel refuses).
+    Every bond sits on the plane at a site within reach of its tip, and no two share a site."""
+    sigma, dt, height, kt = 5e-4, 1e-4, 50e-9, BOLTZMANN * 310.0
+    body = Body(MESH, position=(0, 0, A + 175e-9 + height + 5e-9))
+    contacts = Contacts([body], [MESH.size()], True, GapFinder())
+    means = {}
+    for density in (300e12, 3000e12):
+        counts, expected = [], []
+        for seed in range(30):
+            adh = adhesion(spring_constant=sigma, max_bonds=5000, ligand_geometry="sites", ligand_density=density,
+                           seed=seed, receptor_density=1000e12)
+            tips = body.position + adh.tips
+            near = tips[:, 2] - height < 30e-9 + 20 * np.sqrt(kt / sigma)
+            heights = np.linspace(-5e-9, 30e-9 + 20 * np.sqrt(kt / sigma), 400)  # the integral, tabulated
+            table = [site_integral(h, sigma, 365.0 * dt) for h in heights] if seed == 0 else table
+            expected.append(-np.expm1(-density * np.interp(tips[near, 2] - height, heights, table)).sum())
+            part = adh.advance_state(adh.initial_state([body]), [body], [body], contacts, dt, dt)
+            formed = part["receptor"] >= 0
+            counts.append(formed.sum())
+            anchors = part["anchor"][formed]
+            receptors = part["receptor"][formed].astype(int)
+            assert np.all(anchors[:, 2] == height) and len(np.unique(anchors, axis=0)) == len(anchors)
+            length = np.linalg.norm(tips[receptors] - anchors, axis=1)
+            assert np.all(np.abs(length - 30e-9) < 20 * np.sqrt(kt / sigma))
+        spread = np.std(counts) / np.sqrt(len(counts))
+        means[density] = np.mean(counts)
+        assert np.mean(expected) > 3  # formations per wall and step (4.0 and 30 here)
+        assert abs(np.mean(counts) - np.mean(expected)) < 4 * spread + 0.03 * np.mean(expected)
+    assert means[3000e12] > 5 * means[300e12]
+
+
+def test_ligand_density_goes_with_ligand_sites_only():
+    with pytest.raises(ValueError, match="ligand_density: give it with ligand_geometry"):
+        BondOptions(spring_constant=1e-3, ligand_density=1e15)
+    with pytest.raises(ValueError, match="ligand_density: give it with ligand_geometry"):
+        BondOptions(spring_constant=1e-3, ligand_geometry="sites")
+
+
 def test_cap_on_bonds_per_cell():
     """With max_bonds = 5 (thesis figs. 4.12-4.14 use 40) no cell ever holds more."""
     adh = adhesion(spring_constant=1e-9, on_rate=1e4, max_bonds=5)

@@ -103,6 +103,7 @@ class BoundAdhesion(BondLaws, BoundInteraction):
         self.tip_weights = np.concatenate([w for _, _, w in sampled])
         self.receptor_body = np.concatenate([np.full(len(t), b) for t, b in zip(tips, self.cells)]).astype(np.int32)
         self.receptor_start = np.concatenate([[0], np.cumsum([len(t) for t in tips])]).astype(np.int32)
+        self.receptor_cell = np.repeat(np.arange(len(tips)), [len(t) for t in tips]).astype(np.int32)
         self.n_bodies = model.n_bodies
         self.capacity = self.max_bonds * len(self.cells)
         self._last_state = None  # (contacts, part, vector, moment): _bonds_at
@@ -116,6 +117,7 @@ class BoundAdhesion(BondLaws, BoundInteraction):
         self._tips = wp.array(self.tips, dtype=self.k.vec3, device=self.device)
         self._receptor_body = wp.array(self.receptor_body, dtype=int, device=self.device)
         self._receptor_start = wp.array(self.receptor_start, dtype=int, device=self.device)
+        self._receptor_cell = wp.array(self.receptor_cell, dtype=int, device=self.device)
         self._curvature = wp.array(self.radius + self.roughness, dtype=wp.float64, device=self.device)
         if len(self.ligand_bodies):
             from ..kernels.contact import build_contact_kernels
@@ -345,18 +347,19 @@ class BoundAdhesion(BondLaws, BoundInteraction):
         ligand = wp.zeros(n_receptors, dtype=k.vec3, device=self.device)
         lowering = wp.zeros(n_receptors, dtype=wp.float64, device=self.device)
         chosen = wp.zeros(n_receptors, dtype=int, device=self.device)
+        partner = wp.array(part["partner"].astype(np.int32), dtype=int, device=self.device)
         bonds.formation(
             k, self.device, n_receptors,
             bound, frame["tips"], self._receptor_body, frame["positions"], frame["rotations"], frame["patch_centre"],
             frame["patch_radius"], frame["curvature"], self.equilibrium_length, *self.ligand_span,
-            self.spring_constant / self.thermal_energy, self.reactive_compliance, self.effective_on_rate, dt,
+            self.spring_constant / self.thermal_energy, self.reactive_compliance, self.on_rate, dt,
             self.seed, 2 * draw + 1, wp.array(cell_anchor, dtype=k.vec3, device=self.device),
             wp.array(cell_deviation, dtype=wp.float64, device=self.device),
-            wp.array(cell_partner, dtype=int, device=self.device), candidate, ligand, lowering, chosen)
-        partner = wp.array(part["partner"].astype(np.int32), dtype=int, device=self.device)
+            wp.array(cell_partner, dtype=int, device=self.device), self.ligand_sites, self._receptor_cell,
+            self.max_bonds, receptor, anchor, partner, candidate, ligand, lowering, chosen)
         bonds.insert(k, self.device, len(self.cells), candidate, ligand, lowering, chosen, self._receptor_start,
-                     self.max_bonds, end_time, self.cap_rule == "replace", self.seed, 2 * draw + 1, receptor, anchor,
-                     offset, partner, birth, bound)
+                     self.max_bonds, end_time, self.cap_rule == "replace", self.seed, 2 * draw + 1,
+                     self.ligand_sites is not None, receptor, anchor, offset, partner, birth, bound)
         vector, moment = self.geometry(table, frame)
         on_wall = (partner.numpy() < 0)[:, None]
         force, _, count = self.reduce(receptor, moment, self.tip_forces(vector.numpy()) * on_wall)

@@ -25,8 +25,16 @@ Model, written down (SI):
   as written, for every tip. "layer" is the default: on the plane stiff bonds (100 dyn/cm) at
   Table 4.1's parameters form one or two bonds in 10 ms and the cell passes, against the
   thesis's capture (scenes/README.md, "Where the wall's ligands are": the runs side by side).
-  With a finite ``ligand_density`` n_l the on-rate is scaled by min(1, n_l / n_r) (mean field:
-  the share of receptors facing a free ligand).
+  "sites" (ligands of density ``ligand_density`` n_l, the points of a Poisson process on the
+  plane z = ``ligand_height``, each binding one receptor): a tip binds a free site within reach,
+  its deviation d = |tip - site| - lambda, at the rate of eq. 4.2 summed over the free sites (so
+  k_f0 is the rate per site at the rest length and the tip's rate grows as n_l: the
+  pseudo-first-order rate of 2D kinetics, k_on n_l), the site drawn in proportion to its rate.
+  A tip closer to the plane than lambda binds at its rest length to the sites on a ring of radius
+  sqrt(lambda^2 - dz^2) around it (tilted bonds), one farther than lambda only straight below.
+  The sites come from a hash of the seed and the squares of a lattice of spacing n_l^(-1/2)
+  (``kernels/bonds.py``): the same wall for every step and every cell, unbounded, never stored.
+  Layer and plane hold ligands in excess, so ``ligand_density`` goes with "sites" only.
 * Formation: k_f = k_f0 exp(sigma |d| (r0 - |d|/2) / kT) (eq. 4.2; d the deviation from lambda);
   rupture: k_r = k_r0 exp(r0 |F| / kT) (eq. 4.1), F = sigma (L - lambda) (only tension when
   ``compression`` is false: a compressed bond is slack); each with probability 1 - exp(-k dt),
@@ -63,7 +71,7 @@ from ..options import OptionError, option, validate
 from ..surfaces import quad9
 
 BOLTZMANN = 1.380649e-23  # J/K
-LIGAND_GEOMETRIES = ("layer", "plane")  # BondOptions.ligand_geometry
+LIGAND_GEOMETRIES = ("layer", "plane", "sites")  # BondOptions.ligand_geometry
 CAP_RULES = ("refuse", "replace")  # BondOptions.cap_rule
 
 
@@ -76,9 +84,9 @@ class BondOptions:
                                            low_open=True)
     receptor_density: float = option(20e12, "receptors per area of an adhesive cell's surface, at its microvillus"
                                      " tips", "1/m^2", low=0.0, high=1e18, low_open=True)
-    ligand_density: float | None = option(None, "ligands per area; the on-rate scales by min(1, n_l / n_r). Default:"
-                                          " ligands in excess", "1/m^2", kind=float, low=0.0, high=1e18,
-                                          low_open=True)
+    ligand_density: float | None = option(None, "ligands per area of the wall, for ligand_geometry = sites (required"
+                                          " there; layer and plane hold ligands in excess)", "1/m^2", kind=float,
+                                          low=0.0, high=1e18, low_open=True)
     equilibrium_length: float = option(30e-9, "bond rest length lambda (eq. 4.3)", "m", low=0.0, high=1e-6)
     off_rate: float = option(2.4, "unstressed rupture rate k_r0 (eq. 4.1)", "1/s", low=0.0, high=1e9)
     on_rate: float = option(365.0, "formation rate k_f0 at the rest length (eq. 4.2)", "1/s", low=0.0, high=1e9)
@@ -98,10 +106,12 @@ class BondOptions:
                                         " wall_roughness", "m", kind=float, low=0.0, high=1e-5)
     ligand_geometry: str = option("layer", "where the wall's ligands are: layer (spread through 0 <= z <="
                                   " ligand_layer: a tip at height z binds the one at z - lambda, clamped to the layer,"
-                                  " so inside it every bond forms at its rest length) or plane (on the plane z ="
-                                  " ligand_height: eq. 4.2's deviation measured to it)", choices=LIGAND_GEOMETRIES)
-    ligand_height: float | None = option(None, "height of the ligand plane (ligand_geometry = plane). Default: the"
-                                         " top of the ligand layer, ligand_layer", "m", kind=float, low=0.0, high=1e-5)
+                                  " so inside it every bond forms at its rest length), plane (on the plane z ="
+                                  " ligand_height: eq. 4.2's deviation measured to it) or sites (ligand_density"
+                                  " sites on that plane, one bond each)", choices=LIGAND_GEOMETRIES)
+    ligand_height: float | None = option(None, "height of the ligand plane (ligand_geometry = plane or sites)."
+                                         " Default: the top of the ligand layer, ligand_layer", "m", kind=float,
+                                         low=0.0, high=1e-5)
     kinetics_fraction: float = option(0.1, "the step keeps k dt below this for every bond rate", low=0.0, high=1.0,
                                       low_open=True)
     cell_ligand_layer: float | None = option(None, "thickness of the ligand layer on adherent cells. Default: the"
@@ -111,6 +121,9 @@ class BondOptions:
         validate(self)
         if self.spring_constant is None:
             raise OptionError("spring_constant: missing (N/m; thesis Table 4.1: 0.5-100 dyn/cm = 5e-4-0.1 N/m)")
+        if (self.ligand_geometry == "sites") != (self.ligand_density is not None):
+            raise OptionError("ligand_density: give it with ligand_geometry = \"sites\" and only then (1/m^2; layer"
+                              " and plane hold ligands in excess)")
 
     def resolved(self, cell_roughness: float, wall_roughness: float) -> "BondOptions":
         """The layers not given taken from the repulsion's roughness (m), the ligand plane at the
@@ -157,16 +170,35 @@ class BondLaws:
         return BOLTZMANN * self.temperature
 
     @property
-    def effective_on_rate(self) -> float:
-        """k_f0, scaled by min(1, n_l / n_r) for a finite ligand density (1/s)."""
-        share = 1.0 if self.ligand_density is None else min(1.0, self.ligand_density / self.receptor_density)
-        return self.on_rate * share
+    def sites_in_reach(self) -> float:
+        """With ligand sites, twice the expected number that a tip closer to the plane than lambda
+        finds near its rest length, n_l 2 pi lambda sqrt(2 pi kT / sigma) (the ring of radius
+        sqrt(lambda^2 - dz^2) and width |d| ~ sqrt(kT / sigma) around it; the factor 2 for its
+        fluctuation), at least 1; 1 for ligands in excess."""
+        if self.ligand_geometry != "sites":
+            return 1.0
+        ring = 2.0 * np.pi * self.equilibrium_length * np.sqrt(2.0 * np.pi * self.thermal_energy / self.spring_constant)
+        return max(1.0, 2.0 * self.ligand_density * ring)
 
     @property
     def fastest_formation(self) -> float:
-        """The largest k_f of eq. 4.2 (1/s), at d = r0."""
-        return self.effective_on_rate * np.exp(self.spring_constant * self.reactive_compliance**2
-                                               / (2.0 * self.thermal_energy))
+        """The largest k_f of eq. 4.2 (1/s), at d = r0, for the sites within reach of a tip."""
+        return self.on_rate * self.sites_in_reach * np.exp(self.spring_constant * self.reactive_compliance**2
+                                                           / (2.0 * self.thermal_energy))
+
+    @property
+    def reach_deviation(self) -> float:
+        """The deviation |d| (m) past which eq. 4.2 falls below 1e-6 of k_f0 (sigma d^2 / 2 kT ~
+        ln 1e6)."""
+        return np.sqrt(2.0 * self.thermal_energy * np.log(1e6) / self.spring_constant) + self.reactive_compliance
+
+    @property
+    def ligand_sites(self) -> tuple | None:
+        """(density 1/m^2, lattice spacing m, seed, deviation m) of the wall's ligand sites for the
+        formation kernel, None for ligands in excess (module docstring)."""
+        if self.ligand_geometry != "sites":
+            return None
+        return (self.ligand_density, self.ligand_density**-0.5, (self.seed + 1_000_003) % 2**31, self.reach_deviation)
 
     def rupture_rate(self, force):
         """k_r of eq. 4.1 for bond forces (N; tension positive)."""
@@ -200,7 +232,7 @@ class BondLaws:
     def ligand_span(self) -> tuple:
         """(lowest, highest) height (m) of the wall's ligands: the layer (0, ligand_layer), or the
         plane (ligand_height, ligand_height) (module docstring)."""
-        if self.ligand_geometry == "plane":
+        if self.ligand_geometry != "layer":
             return self.ligand_height, self.ligand_height
         return 0.0, self.ligand_layer
 
@@ -209,8 +241,7 @@ class BondLaws:
         """Height (m) of a tip above the wall beyond which formation is below 1e-6 of k_f0:
         lambda + the highest ligand + the deviation where eq. 4.2 falls to that (sigma d^2 / 2 kT
         ~ ln 1e6)."""
-        deviation = np.sqrt(2.0 * self.thermal_energy * np.log(1e6) / self.spring_constant) + self.reactive_compliance
-        return self.equilibrium_length + self.ligand_span[1] + deviation
+        return self.equilibrium_length + self.ligand_span[1] + self.reach_deviation
 
     @property
     def cell_reach(self) -> float:
