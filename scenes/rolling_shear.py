@@ -20,14 +20,17 @@ docs/figures/rolling_shear.png.
 
 from __future__ import annotations
 
-import csv
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
 
 from warpbem.app.adhesion_states import classify
 from warpbem.app.io import open_result
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from thesis_ch4 import write  # noqa: E402  (the scenes' table writer)
 
 ROOT = Path(__file__).resolve().parent.parent
 RUNS = ROOT / "results" / "rolling_shear"
@@ -57,14 +60,7 @@ def main():
             values = np.array([r[key] for r in group])
             row[key], row[key + "_range"] = float(values.mean()), f"{values.min():.3g}-{values.max():.3g}"
         rows.append(row)
-    out = ROOT / "results" / "rolling_shear.csv"
-    with out.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    for r in rows:
-        print(" | ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}" for k, v in r.items()))
-    print("table:", out)
+    write(rows, "rolling_shear.csv")
 
     from warpbem.app.plotting import _pyplot
 

@@ -18,13 +18,16 @@ contact area against time, as figs. 4.12-4.14).
 
 from __future__ import annotations
 
-import csv
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
 
 from warpbem.app.io import open_result
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from thesis_ch4 import write  # noqa: E402  (the scenes' table writer)
 
 ROOT = Path(__file__).resolve().parent.parent
 RUNS = ROOT / "results" / "fig4_12_14_cap_reached"
@@ -104,14 +107,7 @@ def main():
         return
     runs = [run(p) for p in paths]
     rows = table(runs)
-    out = ROOT / "results" / "thesis_ch4_cap.csv"
-    with out.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    for r in rows:
-        print(" | ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}" for k, v in r.items()))
-    print("table:", out)
+    write(rows, "thesis_ch4_cap.csv")
     print("chart:", chart(runs, ROOT / "docs" / "figures" / "fig4_12_14_cap.png"))
 
 
