@@ -74,6 +74,11 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
         return dtype(wp.randf(state))
 
     @wp.func
+    def formation_rate(d: dtype, on_rate: dtype, spring_per_kt: dtype, compliance: dtype):
+        """k_f of eq. 4.2 at the deviation d from the rest length: k_f0 exp(sigma d (r0 - d / 2) / kT)."""
+        return on_rate * wp.exp(spring_per_kt * d * (compliance - half * d))
+
+    @wp.func
     def site_uniform(seed: int, ix: int, iy: int, k: int):
         """The k-th uniform number of ligand lattice square (ix, iy): a hash of the four."""
         return dtype(wp.randf(wp.rand_init(wp.int32(wp.rand_init(wp.int32(wp.rand_init(seed, ix)), iy)), k)))
@@ -206,7 +211,7 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
             site = vec3(zero, zero, ligand_low)
             if cell_partner[r] >= 0:
                 d = wp.abs(cell_deviation[r])
-                total = on_rate * wp.exp(spring_per_kt * d * (compliance - half * d))
+                total = formation_rate(d, on_rate, spring_per_kt, compliance)
             dz = tip[2] - ligand_low
             window = rest + site_deviation
             if wp.abs(dz) < window:
@@ -222,7 +227,7 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
                             d = wp.abs(wp.length(tip - point) - rest)
                             if d < site_deviation:
                                 if site_taken(row, capacity, bond_receptor, bond_anchor, bond_partner, point) == 0:
-                                    w = on_rate * wp.exp(spring_per_kt * d * (compliance - half * d))
+                                    w = formation_rate(d, on_rate, spring_per_kt, compliance)
                                     total += w
                                     if dtype(wp.randf(pick)) * total < w:
                                         on_site = 1
@@ -243,7 +248,7 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
         on_cell = cell_partner[r] >= 0 and wp.abs(cell_deviation[r]) < d
         if on_cell:
             d = wp.abs(cell_deviation[r])
-        rate = on_rate * wp.exp(spring_per_kt * d * (compliance - half * d))
+        rate = formation_rate(d, on_rate, spring_per_kt, compliance)
         if uniform(seed, draw, r) < one - wp.exp(-rate * dt):
             candidate[r] = 1
             if on_cell:
@@ -297,8 +302,7 @@ def build_bond_kernels(dtype) -> SimpleNamespace:
         if r >= 0:
             bound[r] = 1
 
-    return SimpleNamespace(vec3=vec3, mat33=mat33, hertz_lowering=hertz_lowering, site_uniform=site_uniform,
-                           site_count=site_count, bond_geometry=bond_geometry,
+    return SimpleNamespace(vec3=vec3, mat33=mat33, hertz_lowering=hertz_lowering, bond_geometry=bond_geometry,
                            reduce_per_cell=reduce_per_cell,
                            rupture=rupture, formation=formation, insert=insert, mark_bound=mark_bound)
 

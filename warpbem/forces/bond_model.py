@@ -73,6 +73,7 @@ from ..surfaces import quad9
 BOLTZMANN = 1.380649e-23  # J/K
 LIGAND_GEOMETRIES = ("layer", "plane", "sites")  # BondOptions.ligand_geometry
 CAP_RULES = ("refuse", "replace")  # BondOptions.cap_rule
+SITE_SEED_OFFSET = 1_000_003  # the ligand sites' hash seed, seed + this: a wall apart from the seed's other streams
 
 
 @dataclass(frozen=True)
@@ -198,7 +199,8 @@ class BondLaws:
         formation kernel, None for ligands in excess (module docstring)."""
         if self.ligand_geometry != "sites":
             return None
-        return (self.ligand_density, self.ligand_density**-0.5, (self.seed + 1_000_003) % 2**31, self.reach_deviation)
+        return (self.ligand_density, self.ligand_density**-0.5, (self.seed + SITE_SEED_OFFSET) % 2**31,
+                self.reach_deviation)
 
     def rupture_rate(self, force):
         """k_r of eq. 4.1 for bond forces (N; tension positive)."""
@@ -231,7 +233,7 @@ class BondLaws:
     @property
     def ligand_span(self) -> tuple:
         """(lowest, highest) height (m) of the wall's ligands: the layer (0, ligand_layer), or the
-        plane (ligand_height, ligand_height) (module docstring)."""
+        plane, with or without sites (ligand_height, ligand_height) (module docstring)."""
         if self.ligand_geometry != "layer":
             return self.ligand_height, self.ligand_height
         return 0.0, self.ligand_layer
