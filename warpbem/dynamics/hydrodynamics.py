@@ -38,11 +38,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..options import OptionError
 from ..surfaces.body import Body
 from ..surfaces.placement import PlacementError, check_placement
+from .pairwise import PairwiseMobility, TooClose
 
 PROBE_FORCE = 1e-12  # N: the scale of a basis load's solve (the response is linear)
 MAX_SNAPSHOTS = 256
+# pair snapshots kept (pairwise.py): each holds 2 cells' motion under 13 loads (about 2.5 kB), and
+# a patch of cells rolling apart asks for a few per pair, so many more are kept than of the
+# whole system (64 cells: 2.4 MB each)
+MAX_PAIR_SNAPSHOTS = 65536
 
 
 @dataclass(frozen=True)
@@ -123,7 +129,14 @@ class HydrodynamicSolves:
         # bodies sharing a mesh share their lone snapshots
         self.lone_of = [next(j for j, other in enumerate(model.meshes) if other is m) for m in model.meshes]
         self._snapshots: OrderedDict = OrderedDict()
+        self._pairs: OrderedDict = OrderedDict()
         self.snapshots_solved = 0
+        self.pairwise = None
+        if model.solver.grand_mobility == "pairs":
+            if model.fixed_mask.any() or not all(self.spherical):
+                raise OptionError("solver.grand_mobility = 'pairs' takes free spherical cells only (its pair lattice"
+                                  " holds no orientation and no fixed body); use 'system'")
+            self.pairwise = PairwiseMobility(self)
 
     def background(self, bodies, loads, stiff: bool):
         """(Motion of the flow and the explicit ``loads``, the snapshot used or None); snapshots
@@ -132,7 +145,7 @@ class HydrodynamicSolves:
         if self.tolerance > 0 and stiff:
             try:
                 snapshot = self._snapshot(bodies)
-            except _TooClose:  # solved exactly, not kept
+            except TooClose:  # solved exactly, not kept
                 snapshot = self._solved(bodies)
             flow, basis = snapshot
             u, w, f, t = basis.combine(self.body_coefficients(loads.force, loads.torque))
@@ -174,12 +187,7 @@ class HydrodynamicSolves:
         its holding load."""
         radii = self.model.outer_radii if radii is None else radii
         free = [b for b, body in enumerate(bodies) if not body.fixed]
-        force, torque = np.zeros((6 * len(free), len(bodies), 3)), np.zeros((6 * len(free), len(bodies), 3))
-        for k, b in enumerate(free):
-            for i in range(3):
-                force[6 * k + i, b, i] = 1.0
-                torque[6 * k + 3 + i, b, i] = radii[b]
-        r = self._responses(bodies, force, torque)
+        r = self._responses(bodies, *self._body_loads(len(bodies), free, radii))
         q = r.quadratic()
         velocity, angular_velocity = r.velocity.copy(), r.angular_velocity.copy()
         for j, b in enumerate(free):
@@ -188,12 +196,30 @@ class HydrodynamicSolves:
         return Responses(velocity, angular_velocity, r.force, r.torque, r.load_force, r.load_torque,
                          r.iterations, r.residual)
 
+    def _body_loads(self, n, free=None, radii=None):
+        """(force, torque) (6 f, n, 3) of the "bodies" basis of the ``free`` ones (default all) of
+        ``n`` bodies: unit forces, and torques of 1 N times the outer ``radii``, on each in turn."""
+        free = range(n) if free is None else free
+        radii = self.model.outer_radii if radii is None else radii
+        force, torque = np.zeros((6 * len(free), n, 3)), np.zeros((6 * len(free), n, 3))
+        for k, b in enumerate(free):
+            for i in range(3):
+                force[6 * k + i, b, i] = 1.0
+                torque[6 * k + 3 + i, b, i] = radii[b]
+        return force, torque
+
     def _snapshot(self, bodies):
         """The (flow Motion, grand-mobility Responses) of ``bodies`` from the snapshots: a lone
         body's own; with several, the interaction snapshot on the coarse lattice with each free
         body's self part moved from its coarse height (and orientation) to its fine one."""
         if len(bodies) == 1:
             return self._lone(0, bodies[0], self.tolerance)
+        if self.pairwise is not None:
+            velocity, angular, basis_velocity, basis_angular, iterations, residual = self.pairwise.assemble(bodies)
+            zeros = np.zeros_like(velocity)
+            loads = self._body_loads(len(bodies))
+            return (Motion(velocity, angular, zeros, zeros, iterations, residual),
+                    Responses(basis_velocity, basis_angular, *loads, *loads, iterations, residual))
         key, snapped = self._snapped(bodies, self.interaction)
         flow, grand = self._kept(key, snapped, self._solved)
         if self.interaction == self.tolerance:
@@ -212,33 +238,43 @@ class HydrodynamicSolves:
                 Responses(basis_velocity, basis_angular, grand.force, grand.torque, grand.load_force,
                           grand.load_torque, grand.iterations, grand.residual))
 
-    def _lone(self, index, body, spacing):
+    def _lone(self, index, body, spacing, exact_if_too_close=False):
         """Snapshot of model body ``index`` alone above the wall, its height (and orientation)
-        snapped to ``spacing``: invariant under translation along the wall, so at x = y = 0."""
+        snapped to ``spacing``: invariant under translation along the wall, so at x = y = 0.
+        ``exact_if_too_close``: a snapped height too near the wall solves the body as it is (not
+        kept) instead of raising."""
         position = np.array([0.0, 0.0, body.position[2]])
-        entry, (lone,) = self._snapped([Body(body.mesh, position=position, orientation=body.orientation)],
-                                       spacing, [index])
+        alone = Body(body.mesh, position=position, orientation=body.orientation)
+        entry, (lone,) = self._snapped([alone], spacing, [index])
         radii = self.model.outer_radii[[index]]
-        return self._kept(("lone", self.lone_of[index], spacing) + entry, [lone],
-                          lambda b: self._solved(b, radii))
+        try:
+            return self._kept(("lone", self.lone_of[index], spacing) + entry, [lone],
+                              lambda b: self._solved(b, radii))
+        except TooClose:
+            if not exact_if_too_close:
+                raise
+            return self._solved([alone], radii)
 
     def _solved(self, bodies, radii=None):
         """A snapshot solved at ``bodies``: (flow Motion, grand mobility Responses)."""
         return Motion.of(self.mobility.solve(bodies, check_placement_first=False)), self._grand_mobility(bodies, radii)
 
-    def _kept(self, key, snapped, solve):
-        if key in self._snapshots:
-            self._snapshots.move_to_end(key)
-            return self._snapshots[key]
+    def _kept(self, key, snapped, solve, store=None):
+        """The snapshot ``key`` from ``store`` (default the whole systems' and lone ones; the
+        pairs' is ``_pairs``), solved at ``snapped`` by ``solve`` and kept if new."""
+        store = self._snapshots if store is None else store
+        if key in store:
+            store.move_to_end(key)
+            return store[key]
         try:
             check_placement(snapped, self.model.flow.wall)
         except PlacementError:
-            raise _TooClose from None
+            raise TooClose from None
         snapshot = solve(snapped)
         self.snapshots_solved += 1
-        self._snapshots[key] = snapshot
-        while len(self._snapshots) > MAX_SNAPSHOTS:
-            self._snapshots.popitem(last=False)
+        store[key] = snapshot
+        while len(store) > (MAX_PAIR_SNAPSHOTS if store is self._pairs else MAX_SNAPSHOTS):
+            store.popitem(last=False)
         return snapshot
 
     def _snapped(self, bodies, spacing, indices=None):
@@ -262,6 +298,3 @@ class HydrodynamicSolves:
             snapped.append(Body(b.mesh, position=cell * lattice, orientation=orientation, fixed=False))
         return tuple(key), snapped
 
-
-class _TooClose(Exception):
-    """A snapped configuration is not a valid placement (a gap below the lattice spacing)."""

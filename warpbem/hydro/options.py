@@ -35,6 +35,11 @@ DEFAULT_TOLERANCE = {"float64": 1e-8, "float32": 1e-6}
 # 3.5e-4, 20 um: 2e-3)
 DEFAULT_CUTOFF = 40e-6
 NEAR_FAR_SPLITS = ("auto", "on", "off")
+GRAND_MOBILITIES = ("system", "pairs")
+# m: the pair lattice at contact distance (dynamics/pairwise.py); placeholder until measured
+DEFAULT_PAIR_LATERAL = 10e-9
+# m: pairs of cells farther apart than this are left out (dynamics/pairwise.py); placeholder until measured
+DEFAULT_PAIR_CUTOFF = 100e-6
 # fixed cells from which "auto" switches the near-far split on: per step on the crossing path
 # (benchmarks/frozen.py steps --counts 1 2 3 4 5 --full; docs/figures/frozen_steps_notes.md) the
 # split cost as much as the full solve up to 4 x 4 domes (2.11 against 2.12 s at 16) and 35-40 %
@@ -98,6 +103,16 @@ class SolverOptions:
     reuse_interaction: float | None = option(None, "height lattice of the several-body snapshots, >= reuse_tolerance."
                                              " Default: 10 x reuse_tolerance", "m", kind=float, low=0.0, high=1e-6,
                                              low_open=True)
+    grand_mobility: str = option("system", "several free cells' snapshots: 'system' (the whole system's, 6 n + 1"
+                                 " solves of n cells) or 'pairs' (each cell's lone snapshot and the two-body"
+                                 " snapshots of every pair within pair_cutoff, shared by pairs of the same offset and"
+                                 " heights: a cost linear in the cells, for cells tens of micrometres apart;"
+                                 " dynamics/pairwise.py, README 'Many adhesive cells')", choices=GRAND_MOBILITIES)
+    pair_lateral: float = option(DEFAULT_PAIR_LATERAL, "with grand_mobility = 'pairs', the lateral lattice of the pair"
+                                 " snapshots at contact distance, growing as (distance / contact)^4 in steps of 2",
+                                 "m", low=0.0, high=1e-5, low_open=True)
+    pair_cutoff: float = option(DEFAULT_PAIR_CUTOFF, "with grand_mobility = 'pairs', pairs of cells farther apart"
+                                " along the wall than this do not interact", "m", low=0.0, high=1e-2)
     near_far_split: str = option("auto", "time stepping: the adherent cells' background solved once, each solve"
                                  " holding the free cells and the adherent cells near them (hydro/frozen.py): on,"
                                  f" off, or auto: on with at least {NEAR_FAR_FIXED_CELLS} fixed cells"

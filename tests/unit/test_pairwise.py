@@ -1,0 +1,70 @@
+"""The grand mobility of several free cells from lone and pair snapshots
+(warpbem/dynamics/pairwise.py, ``[solver] grand_mobility = "pairs"``)."""
+
+import numpy as np
+import pytest
+
+import warpbem as wb
+from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion
+from warpbem.dynamics.model import Flow, Model, SolverOptions, build_solver
+from warpbem.dynamics.pairwise import lateral_spacing, pair_key
+from warpbem.options import OptionError
+from warpbem.surfaces.body import Body
+
+A = 2e-6
+MESH = wb.mesh.sphere(A, 2)
+HEIGHT = A + 236e-9
+EXACT = dict(reuse_tolerance=1e-12, reuse_interaction=1e-12, pair_lateral=1e-12)  # lattices below round-off
+
+
+def solves(n, meshes=None, fixed=None, **solver):
+    model = Model(meshes or [MESH] * n, fixed or [False] * n, Flow(100.0, 1e-3), solver=SolverOptions(**solver))
+    return HydrodynamicSolves(model, build_solver(model.solver, model.flow, "cpu"))
+
+
+def motion(flow, grand):
+    """(grand mobility Q, the flow's velocity and angular velocity times A) of a snapshot."""
+    return grand.quadratic(), np.concatenate([flow.velocity.ravel(), flow.angular_velocity.ravel() * A])
+
+
+def relative_change(a, b):
+    return [np.abs(x - y).max() / np.abs(y).max() for x, y in zip(a, b)]
+
+
+@pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
+@pytest.mark.parametrize("offset", [(-3 * A, 1.5 * A), (3 * A, -1.5 * A), (-3 * A, -1.5 * A)],
+                         ids=["exchanged-and-mirrored", "mirrored", "exchanged"])
+def test_two_cells_from_their_pair_snapshot_are_the_direct_solve(offset):
+    """For two cells the pairwise sum is exact: M = M_i + (M^(ij) - M_i), so the assembled grand
+    mobility and flow motion equal the direct solve of the two, whatever symmetry maps the pair
+    to its stored form (the first cell at the origin, the offset in x >= 0, y >= 0): the
+    translation along the wall, the exchange of the cells, the mirror y -> -y (forces and
+    velocities change their y components, torques and angular velocities their x and z ones).
+    A wrong sign in any of them changes entries of the size of the coupling (1e-2 here)."""
+    hydro = solves(2, **EXACT, grand_mobility="pairs")
+    bodies = [Body(MESH, position=(0.7e-6, -0.4e-6, HEIGHT + 9e-9)),
+              Body(MESH, position=(0.7e-6 + offset[0], -0.4e-6 + offset[1], HEIGHT - 7e-9))]
+    direct = motion(Motion.of(hydro.mobility.solve(bodies)), hydro._grand_mobility(bodies))
+    assembled = motion(*hydro._snapshot(bodies))
+    assert max(relative_change(assembled, direct)) < 1e-7
+    alone = motion(*solves(2, **EXACT, grand_mobility="pairs", pair_cutoff=0.0)._snapshot(bodies))
+    assert min(relative_change(alone, direct)) > 1e-3  # the coupling the check would miss
+
+
+def test_the_pair_lattice_grows_as_the_fourth_power_of_the_distance_in_steps_of_2():
+    contact = 2 * A
+    assert lateral_spacing(1.5 * A, 10e-9, contact) == 10e-9  # below contact distance: the base
+    assert lateral_spacing(2 * contact, 10e-9, contact) == 10e-9 * 16  # (r / contact)^4 = 16
+    assert lateral_spacing(2.5 * contact, 10e-9, contact) == 10e-9 * 32  # 39.06 -> 32
+    # the same pair seen from either cell, or mirrored, has one key
+    keys = {pair_key(np.array(o), (HEIGHT, HEIGHT), (0, 0), 10e-9, contact)[0]
+            for o in ((5 * A, 1 * A), (-5 * A, -1 * A), (5 * A, -1 * A), (-5 * A, 1 * A))}
+    assert len(keys) == 1
+
+
+def test_pairs_refuse_fixed_and_non_spherical_cells():
+    spheroid = wb.mesh.spheroid(A, 0.5 * A, 2)
+    with pytest.raises(OptionError, match="grand_mobility = 'pairs' takes free spherical cells only"):
+        solves(2, meshes=[MESH, spheroid], reuse_tolerance=2e-9, grand_mobility="pairs")
+    with pytest.raises(OptionError, match="grand_mobility = 'pairs' takes free spherical cells only"):
+        solves(2, fixed=[False, True], reuse_tolerance=2e-9, grand_mobility="pairs")
