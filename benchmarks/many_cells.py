@@ -22,14 +22,22 @@ import warnings
 import numpy as np
 
 import warpbem as wb
-from common import arguments, print_table, write_csv
+from common import arguments, output as output_path, print_table, pyplot, save_chart, write_csv
 from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion
-from warpbem.dynamics.model import Flow, Model, SolverOptions, build_solver
+from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy, build_solver
+from warpbem.dynamics.simulator import Simulator
+from warpbem.forces.adhesion import Adhesion
+from warpbem.forces.bond_model import BondOptions
+from warpbem.forces.external import STANDARD_GRAVITY, Gravity
+from warpbem.forces.repulsion import Repulsion
 from warpbem.surfaces.body import Body
 
 warnings.simplefilter("ignore", wb.ContactResolutionWarning)
 A = 5e-6
 REST = A + 236e-9  # m: centre height where gravity and eq. 3.1 balance (benchmarks/adhesion.py)
+# the state diagram's rolling point on stiff bonds (scenes/rolling_cells.toml)
+ROLLING = dict(spring_constant=0.1, equilibrium_length=30e-9, off_rate=1.0, reactive_compliance=0.6e-10,
+               on_rate=365.0, receptor_density=20e12, max_bonds=200)
 EXACT = dict(reuse_tolerance=1e-12, reuse_interaction=1e-12, pair_lateral=1e-12)  # lattices below round-off
 
 
@@ -83,6 +91,68 @@ def accuracy(device, cases, k):
     return rows
 
 
+def rolling_patch(n, spacing, mode, k=3, seed=1):
+    """(model, state) of n rigid cells rolling on stiff bonds, released at the rest height in a
+    line (n <= 3) or a square patch, with ``mode`` "system" or "pairs" snapshots."""
+    mesh = wb.mesh.sphere(A, k)
+    interactions = [Gravity([1050.0] * n, 1000.0, STANDARD_GRAVITY), Repulsion(),
+                    Adhesion(BondOptions(**ROLLING, seed=seed))]
+    model = Model([mesh] * n, [False] * n, Flow(100.0, 1e-3), interactions=interactions,
+                  solver=SolverOptions(reuse_tolerance=2e-9, grand_mobility=mode),
+                  policy=StepPolicy(1e-3, 1e-8, 1e-9), scheme="euler")
+    positions = arrangement("line" if n <= 3 else "patch", n, spacing, seed)
+    positions[:, 2] = REST
+    return model, model.initial_state(positions)
+
+
+def cost(device, counts, system_counts, spacing, end):
+    """Wall time of n rolling cells over ``end`` s, pairs (and the whole system's snapshots for
+    ``system_counts``) side by side: the median step that solved no new snapshot (the cost that
+    must grow linearly), the snapshots solved and the time they took (the steps' excess over that
+    median), and the memory of the kept snapshots."""
+    rows = []
+    for mode, ns in (("pairs", counts), ("system", system_counts)):
+        for n in ns:
+            model, state = rolling_patch(n, spacing, mode)
+            sim = Simulator(model, device)
+            walls, solved, t0 = [], [], time.perf_counter()
+            while state.time < end:
+                before, t = sim.hydro.snapshots_solved, time.perf_counter()
+                state, frame = sim.step(state, end)
+                walls.append(time.perf_counter() - t)
+                solved.append(sim.hydro.snapshots_solved - before)
+            walls, solved = np.array(walls), np.array(solved)
+            plain = float(np.median(walls[solved == 0])) if np.any(solved == 0) else float("nan")
+            kept = list(sim.hydro._pairs.values()) + list(sim.hydro._snapshots.values())
+            rows.append(dict(mode=mode, cells=n, simulated_ms=end * 1e3, steps=state.steps,
+                             wall_s=time.perf_counter() - t0, step_s=plain, snapshots=int(solved.sum()),
+                             snapshot_s=float(np.sum(walls[solved > 0] - plain)) / max(int(solved.sum()), 1),
+                             bonds=int(frame.parts["bond"]["count"].sum()),
+                             kept_mb=sum(a.nbytes for f, g in kept for a in (f.velocity, f.angular_velocity,
+                                                                             g.velocity, g.angular_velocity)) / 1e6))
+            print_table([rows[-1]])
+    return rows
+
+
+def exponent(rows, key):
+    """The fitted exponent of ``key`` against the cells, and the fit's prefactor."""
+    n = np.array([r["cells"] for r in rows], float)
+    slope, intercept = np.polyfit(np.log(n), np.log([r[key] for r in rows]), 1)
+    return slope, np.exp(intercept)
+
+
+def cost_chart(rows, path):
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    for mode, marker in (("pairs", "o"), ("system", "s")):
+        sel = [r for r in rows if r["mode"] == mode]
+        if sel:
+            ax.loglog([r["cells"] for r in sel], [r["step_s"] for r in sel], marker=marker, label=mode)
+    ax.set(xlabel="rolling cells", ylabel="wall time of a step without new snapshots [s]",
+           title="cost per step (2-core CPU)")
+    return save_chart(fig, path, [ax], legend_size=8)
+
+
 def main():
     parser = arguments(__doc__)
     parser.add_argument("--parts", nargs="+", default=["accuracy"], choices=["accuracy", "cost"])
@@ -93,6 +163,12 @@ def main():
                  [("line", 3, 12e-6), ("line", 3, 25e-6), ("patch", 4, 25e-6), ("patch", 9, 25e-6)])
         rows = accuracy(args.device, cases, args.k)
         print(f"wrote {write_csv('many_cells_accuracy.csv', rows)}")
+    if "cost" in args.parts:
+        counts, system_counts, end = ([1, 3], [3], 5e-4) if args.quick else ([1, 3, 4, 9, 16], [3, 4], 2e-3)
+        rows = cost(args.device, counts, system_counts, 25e-6, end)
+        slope, _ = exponent([r for r in rows if r["mode"] == "pairs" and r["cells"] > 1], "step_s")
+        print(f"pairs: a step without new snapshots costs n^{slope:.2f} from 3 cells")
+        print(f"wrote {write_csv('many_cells_cost.csv', rows)}, {cost_chart(rows, output_path('many_cells.png'))}")
 
 
 if __name__ == "__main__":

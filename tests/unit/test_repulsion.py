@@ -7,7 +7,7 @@ import warpbem as wb
 from warpbem.surfaces import quad9
 from warpbem.surfaces.gaps import WALL, GapFinder
 from warpbem.surfaces.placement import signed_distance
-from warpbem.dynamics.implicit import ImplicitSystem
+from warpbem.dynamics.implicit import DenseResponse, ImplicitSystem
 from warpbem.dynamics.model import Model
 from warpbem.forces.repulsion import Repulsion
 
@@ -63,7 +63,7 @@ def test_joint_step_solves_the_backward_euler_equation():
     rep = Repulsion()
     eps, rate = np.array([20e-9, 15e-9]), np.array([-3e-6, -1e-6])
     response = np.array([[4e6, 1e6], [1e6, 2e6]])  # m/(N s)
-    system = ImplicitSystem(eps, rate, response, response, [(slice(0, 2), rep.law)])
+    system = ImplicitSystem(eps, rate, DenseResponse(response), response, [(slice(0, 2), rep.law)])
     for dt in (1e-5, 1e-3, 1e-1):
         z, force = system.solve(dt, [])
         end = system.end_values(z, dt)

@@ -28,6 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse
 
 MAX_ITERATIONS = 200
 LENGTH_TOLERANCE = 1e-16  # m: converged when no coordinate moves by more (plus 1e-13 relative)
@@ -37,16 +38,83 @@ class ImplicitSolveError(RuntimeError):
     """The joint backward-Euler solve found no admissible start or did not converge."""
 
 
+class DenseResponse:
+    """R (m, p) held whole: the rate of each coordinate under each basis load."""
+
+    def __init__(self, matrix: np.ndarray):
+        self.matrix = matrix
+
+    def __matmul__(self, z):
+        return self.matrix @ z
+
+    def transposed(self, f):
+        """R^T f."""
+        return self.matrix.T @ f
+
+    def weighted_gram(self, where, k):
+        """R_w^T K R_w of the coordinates ``where`` and their stiffness k (per coordinate, or 3 x 3
+        blocks)."""
+        r = self.matrix[where]
+        if k.ndim == 1:
+            return r.T @ (k[:, None] * r)
+        g = r.reshape(len(k), 3, -1)
+        return np.einsum("gip,gij,gjq->pq", g, k, g)
+
+    def holding_loads(self, rates):
+        """The coefficients that hold every coordinate still (R z = -r, least squares)."""
+        return np.linalg.lstsq(self.matrix, -rates, rcond=1e-14)[0]
+
+
+class FactoredResponse(DenseResponse):
+    """R = G V, never formed: G (m, 6 n, sparse) the rate of each coordinate per unit rigid
+    motion of each body (a bond moves with one cell, a contact with two), V (6 n, p) the motion
+    of each basis load. With n cells and m = O(n) bonds its products cost O(n p) where the
+    whole R's R^T K R costs O(n p^2) (issue 25: the implicit solve sparse over cells)."""
+
+    def __init__(self, geometry, motion: np.ndarray):
+        self.geometry, self.motion = geometry, motion
+
+    @classmethod
+    def of(cls, coordinates, velocity, angular_velocity) -> "FactoredResponse":
+        """From the coordinates' unit loads (m, n, 3) and the basis's motions (p, n, 3)."""
+        m, n = coordinates.unit_force.shape[:2]
+        g = np.concatenate([coordinates.unit_force, coordinates.unit_torque], axis=2).reshape(m, 6 * n)
+        motion = np.concatenate([velocity, angular_velocity], axis=2).reshape(-1, 6 * n).T
+        return cls(scipy.sparse.csr_matrix(g), motion)
+
+    def __matmul__(self, z):
+        return self.geometry @ (self.motion @ z)
+
+    def transposed(self, f):
+        return self.motion.T @ (self.geometry.T @ f)
+
+    def weighted_gram(self, where, k):
+        g = self.geometry[where]
+        if k.ndim == 1:
+            weights = scipy.sparse.diags(k)
+        else:  # 3 x 3 blocks along the diagonal
+            weights = scipy.sparse.bsr_matrix((k, np.arange(len(k)), np.arange(len(k) + 1)),
+                                              shape=(g.shape[0], g.shape[0]))
+        return self.motion.T @ ((g.T @ (weights @ g)) @ self.motion)
+
+    def holding_loads(self, rates):
+        """Least squares through the normal equations, (G V)^T (G V) z = -(G V)^T r, whose matrix
+        is V^T (G^T G) V (p x p)."""
+        gram = self.motion.T @ ((self.geometry.T @ self.geometry) @ self.motion)
+        return np.linalg.lstsq(gram, -self.transposed(rates), rcond=1e-14)[0]
+
+
 @dataclass(frozen=True)
 class ImplicitSystem:
-    """values s (m,), rates r (m,) m/s, rate_response R (m, p) m/(N s), quadratic Q (p, p)
+    """values s (m,), rates r (m,) m/s, rate_response R (m, p) m/(N s) (a DenseResponse or a
+    FactoredResponse), quadratic Q (p, p)
     m/(N s) and ``laws``: [(slice of the coordinates, law)] with law(s) -> (U, f, k): energies
     and forces per coordinate, and stiffnesses either per coordinate (m,) or, for laws of
     vectors (a bond's 3 components), as 3 x 3 blocks (m / 3, 3, 3)."""
 
     values: np.ndarray
     rates: np.ndarray
-    rate_response: np.ndarray
+    rate_response: DenseResponse
     quadratic: np.ndarray
     laws: list
 
@@ -62,12 +130,7 @@ class ImplicitSystem:
         """Q + dt R^T K R, K block diagonal by laws."""
         h = self.quadratic.copy()
         for where, k in stiffness:
-            r = self.rate_response[where]
-            if k.ndim == 1:
-                h += dt * r.T @ (k[:, None] * r)
-            else:
-                g = r.reshape(len(k), 3, -1)
-                h += dt * np.einsum("gip,gij,gjq->pq", g, k, g)
+            h += dt * self.rate_response.weighted_gram(where, k)
         return h
 
     def end_values(self, z, dt):
@@ -78,14 +141,14 @@ class ImplicitSystem:
         return 0.5 * z @ self.quadratic @ z + np.sum(energy) / dt, force, stiffness
 
     def _smaller_gradient(self, z, force, gradient) -> bool:
-        return np.linalg.norm(self.quadratic @ z - self.rate_response.T @ force) < 0.5 * np.linalg.norm(gradient)
+        return np.linalg.norm(self.quadratic @ z - self.rate_response.transposed(force)) < 0.5 * np.linalg.norm(gradient)
 
     def solve(self, dt: float, starts) -> tuple[np.ndarray, np.ndarray]:
         """Coefficients z (p,) and forces f(s') (m,) of the step; ``starts``: candidate
         coefficients tried in order after z = 0 and the loads that hold every coordinate still
         (s' = s, admissible since the state is), until one is admissible."""
         p = self.quadratic.shape[0]
-        still = np.linalg.lstsq(self.rate_response, -self.rates, rcond=1e-14)[0]
+        still = self.rate_response.holding_loads(self.rates)
         for z in [np.zeros(p), still, *starts]:
             phi, force, stiffness = self.objective(z, dt)
             if np.isfinite(phi):
@@ -93,7 +156,7 @@ class ImplicitSystem:
         else:
             raise ImplicitSolveError("no admissible start: every candidate makes a force law diverge")
         for _ in range(MAX_ITERATIONS):
-            gradient = self.quadratic @ z - self.rate_response.T @ force
+            gradient = self.quadratic @ z - self.rate_response.transposed(force)
             step = -np.linalg.lstsq(self.hessian(stiffness, dt), gradient, rcond=1e-14)[0]
             moves = dt * np.abs(self.rate_response @ step)
             # converged when the step moves no coordinate and changes the motion it causes by

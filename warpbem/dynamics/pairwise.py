@@ -96,64 +96,90 @@ class PairwiseMobility:
         self.base = model.solver.pair_lateral
         self.cutoff = model.solver.pair_cutoff
         self.radii = model.outer_radii
+        self._cached_key, self._cached = None, None
 
     def assemble(self, bodies):
         """(flow velocity, angular velocity (n, 3); basis velocity, angular velocity (6n, n, 3),
-        iterations, residual) of the free ``bodies``."""
-        hydro, n = self.hydro, len(bodies)
-        velocity, angular = np.zeros((n, 3)), np.zeros((n, 3))
-        basis_velocity, basis_angular = np.zeros((6 * n, n, 3)), np.zeros((6 * n, n, 3))
+        iterations, residual) of the free ``bodies``: each cell's lone snapshot at its fine
+        height, plus the pairs' part, which is kept while no pair changes its lattice point (the
+        fine heights change every few steps of a rolling cell, the pairs' lattice points rarely)."""
+        hydro = self.hydro
+        velocity, angular, basis_velocity, basis_angular = (a.copy() for a in self._pairs_part(bodies))
         iterations, residual = 0, 0.0
-        coarse = []
         for b, body in enumerate(bodies):
-            (flow, grand), lone_coarse = (hydro._lone(b, body, d, exact_if_too_close=True)
-                                          for d in (hydro.tolerance, hydro.interaction))
-            velocity[b], angular[b] = flow.velocity[0], flow.angular_velocity[0]
+            flow, grand = hydro._lone(b, body, hydro.tolerance, exact_if_too_close=True)
+            velocity[b] += flow.velocity[0]
+            angular[b] += flow.angular_velocity[0]
             rows = slice(6 * b, 6 * b + 6)
-            basis_velocity[rows, b], basis_angular[rows, b] = grand.velocity[:, 0], grand.angular_velocity[:, 0]
-            coarse.append(lone_coarse)
+            basis_velocity[rows, b] += grand.velocity[:, 0]
+            basis_angular[rows, b] += grand.angular_velocity[:, 0]
             iterations += flow.iterations + grand.iterations
             residual = max(residual, flow.residual, grand.residual)
+        return velocity, angular, basis_velocity, basis_angular, iterations, residual
+
+    def _pairs_part(self, bodies):
+        """sum over the pairs within the cut-off of [pair snapshot - each cell's lone snapshot at
+        the pair's heights]: the flow's (n, 3) velocity and angular velocity corrections and the
+        basis's (6n, n, 3) ones."""
+        n = len(bodies)
         positions = np.array([body.position for body in bodies])
+        entries = []
         for i in range(n):
             for j in range(i + 1, n):
                 offset = positions[j, :2] - positions[i, :2]
-                if np.hypot(*offset) > self.cutoff:
-                    continue
-                (flow_v, flow_w), (grand_v, grand_w), order = self._pair(bodies, i, j, offset)
-                for a, b in enumerate(order):
-                    lone_flow, lone_grand = coarse[b]
-                    velocity[b] += flow_v[a] - lone_flow.velocity[0]
-                    angular[b] += flow_w[a] - lone_flow.angular_velocity[0]
-                    for c, other in enumerate(order):
-                        rows, pair_rows = slice(6 * other, 6 * other + 6), slice(6 * c, 6 * c + 6)
-                        basis_velocity[rows, b] += grand_v[pair_rows, a]
-                        basis_angular[rows, b] += grand_w[pair_rows, a]
-                    rows = slice(6 * b, 6 * b + 6)
-                    basis_velocity[rows, b] -= lone_grand.velocity[:, 0]
-                    basis_angular[rows, b] -= lone_grand.angular_velocity[:, 0]
-        return velocity, angular, basis_velocity, basis_angular, iterations, residual
+                if np.hypot(*offset) <= self.cutoff:
+                    entries.append(self._pair_entry(bodies, i, j, offset))
+        key = tuple((e[0], e[1], e[2], e[4]) for e in entries)
+        if key == self._cached_key:
+            return self._cached
+        velocity, angular = np.zeros((n, 3)), np.zeros((n, 3))
+        basis_velocity, basis_angular = np.zeros((6 * n, n, 3)), np.zeros((6 * n, n, 3))
+        exact = False
+        for entry in entries:
+            (flow_v, flow_w), (grand_v, grand_w), order, solved_as_is = self._pair_values(bodies, *entry)
+            exact |= solved_as_is
+            for a, b in enumerate(order):
+                lone_flow, lone_grand = self.hydro._lone(b, bodies[b], self.hydro.interaction, exact_if_too_close=True)
+                velocity[b] += flow_v[a] - lone_flow.velocity[0]
+                angular[b] += flow_w[a] - lone_flow.angular_velocity[0]
+                for c, other in enumerate(order):
+                    rows, pair_rows = slice(6 * other, 6 * other + 6), slice(6 * c, 6 * c + 6)
+                    basis_velocity[rows, b] += grand_v[pair_rows, a]
+                    basis_angular[rows, b] += grand_w[pair_rows, a]
+                rows = slice(6 * b, 6 * b + 6)
+                basis_velocity[rows, b] -= lone_grand.velocity[:, 0]
+                basis_angular[rows, b] -= lone_grand.angular_velocity[:, 0]
+        part = (velocity, angular, basis_velocity, basis_angular)
+        # a pair solved as it is (too near for its lattice) is not a lattice point: not kept
+        self._cached_key, self._cached = (None, None) if exact else (key, part)
+        return part
 
-    def _pair(self, bodies, i, j, offset):
-        """The pair's (flow motion, basis responses) in the order ``order`` of its cells (model
-        indices), from its snapshot at the canonical offset and snapped heights."""
-        hydro = self.hydro
-        d = hydro.interaction
+    def _pair_entry(self, bodies, i, j, offset):
+        """(key, swapped, mirrored, canonical offset and heights, (i, j)) of the pair (pair_key)."""
+        d = self.hydro.interaction
         heights = tuple(float(np.round(bodies[b].position[2] / d) * d) for b in (i, j))
-        meshes = (hydro.lone_of[i], hydro.lone_of[j])
-        contact = self.radii[i] + self.radii[j]
-        key, swapped, mirrored, canonical, (h0, h1) = pair_key(offset, heights, meshes, self.base, contact)
+        meshes = (self.hydro.lone_of[i], self.hydro.lone_of[j])
+        key, swapped, mirrored, canonical, canonical_heights = pair_key(offset, heights, meshes, self.base,
+                                                                        self.radii[i] + self.radii[j])
+        return key, swapped, mirrored, (canonical, canonical_heights), (i, j)
+
+    def _pair_values(self, bodies, key, swapped, mirrored, canonical, cells):
+        """The pair's (flow motion, basis responses) in the order ``order`` of its cells (model
+        indices), from its snapshot at the canonical offset and snapped heights, and whether it
+        was solved as it is instead."""
+        hydro, (i, j) = self.hydro, cells
+        (offset, (h0, h1)) = canonical
         order = (j, i) if swapped else (i, j)
         snapped = [Body(bodies[order[0]].mesh, position=(0.0, 0.0, h0)),
-                   Body(bodies[order[1]].mesh, position=(canonical[0], canonical[1], h1))]
+                   Body(bodies[order[1]].mesh, position=(offset[0], offset[1], h1))]
         radii = self.radii[list(order)]
         try:
             flow, grand = hydro._kept(key, snapped, lambda b: hydro._solved(b, radii), store=hydro._pairs)
         except TooClose:  # nearer than the lattice allows: the pair solved as it is, not kept
             flow, grand = hydro._solved([bodies[i], bodies[j]], self.radii[[i, j]])
-            return (flow.velocity, flow.angular_velocity), (grand.velocity, grand.angular_velocity), (i, j)
+            return (flow.velocity, flow.angular_velocity), (grand.velocity, grand.angular_velocity), (i, j), True
         motion = (flow.velocity, flow.angular_velocity)
         basis = (grand.velocity, grand.angular_velocity)
         if mirrored:
             motion, basis = mirror_motion(*motion), mirror_basis(*basis)
-        return motion, basis, order
+        return motion, basis, order, False

@@ -30,7 +30,7 @@ from ..surfaces.placement import PlacementError, check_placement
 from . import integrate
 from .frame import Frame
 from .hydrodynamics import Hydrodynamics, HydrodynamicSolves
-from .implicit import ImplicitSolveError, ImplicitSystem
+from .implicit import DenseResponse, FactoredResponse, ImplicitSolveError, ImplicitSystem
 from .model import Model, build_solver
 from .state import State
 
@@ -191,8 +191,13 @@ class Simulator:
         basis, kind = self.hydro.basis(bodies, coordinates, snapshot)
         quadratic = basis.quadratic()
         # rates consistent with the symmetrised dissipation (reciprocity; hydrodynamics.py)
-        rate_response = quadratic if kind == "coordinates" else np.array(
-            [coordinates.rates(u, w) for u, w in zip(basis.velocity, basis.angular_velocity)]).T
+        if kind == "coordinates":
+            rate_response = DenseResponse(quadratic)
+        elif self.hydro.pairwise is not None:  # many cells: R never formed (implicit.py)
+            rate_response = FactoredResponse.of(coordinates, basis.velocity, basis.angular_velocity)
+        else:
+            rate_response = DenseResponse(np.array([coordinates.rates(u, w) for u, w in
+                                                    zip(basis.velocity, basis.angular_velocity)]).T)
         rates = coordinates.rates(background.velocity, background.angular_velocity)
         system = ImplicitSystem(coordinates.values, rates, rate_response, quadratic,
                                 [(where, x.law) for x, where in owners])
