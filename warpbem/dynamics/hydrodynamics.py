@@ -136,13 +136,17 @@ class HydrodynamicSolves:
             if model.fixed_mask.any() or not all(self.spherical):
                 raise OptionError("solver.grand_mobility = 'pairs' takes free spherical cells only (its pair lattice"
                                   " holds no orientation and no fixed body); use 'system'")
+            if not self.tolerance > 0:
+                raise OptionError("solver.grand_mobility = 'pairs' is built from snapshots: it needs"
+                                  " solver.reuse_tolerance > 0 (2e-9 m, the adhesive scenes' default)")
             self.pairwise = PairwiseMobility(self)
 
     def background(self, bodies, loads, stiff: bool):
         """(Motion of the flow and the explicit ``loads``, the snapshot used or None); snapshots
         serve states with ``stiff`` forces only (bonds), so a free-stream pass, whose
-        configurations never repeat, costs one solve per state."""
-        if self.tolerance > 0 and stiff:
+        configurations never repeat, costs one solve per state; the pairs serve every state (they
+        never solve the whole system)."""
+        if self.tolerance > 0 and (stiff or self.pairwise is not None):
             try:
                 snapshot = self._snapshot(bodies)
             except TooClose:  # solved exactly, not kept
