@@ -136,6 +136,9 @@ class HydrodynamicSolves:
             if model.fixed_mask.any() or not all(self.spherical):
                 raise OptionError("solver.grand_mobility = 'pairs' takes free spherical cells only (its pair lattice"
                                   " holds no orientation and no fixed body); use 'system'")
+            if model.solver.near_far_split == "on":
+                raise OptionError("solver.grand_mobility = 'pairs' holds no fixed body: near_far_split = 'on' does"
+                                  " not apply")
             if not self.tolerance > 0:
                 raise OptionError("solver.grand_mobility = 'pairs' is built from snapshots: it needs"
                                   " solver.reuse_tolerance > 0 (2e-9 m, the adhesive scenes' default)")
@@ -261,7 +264,9 @@ class HydrodynamicSolves:
 
     def _solved(self, bodies, radii=None):
         """A snapshot solved at ``bodies``: (flow Motion, grand mobility Responses)."""
-        return Motion.of(self.mobility.solve(bodies, check_placement_first=False)), self._grand_mobility(bodies, radii)
+        # the pairs' snapshots factor every block: 13 solves of one system (pairwise.py)
+        flow = self.mobility.solve(bodies, check_placement_first=False, factor_every_body=self.pairwise is not None)
+        return Motion.of(flow), self._grand_mobility(bodies, radii)
 
     def _kept(self, key, snapped, solve, store=None):
         """The snapshot ``key`` from ``store`` (default the whole systems' and lone ones; the

@@ -247,7 +247,8 @@ class CompletedDoubleLayer:
         matrix += (added - matrix @ modes) @ weighted
         return matrix
 
-    def preconditioner(self, previous: "CompletedDoubleLayer | None", kept_for_later: bool = True) -> spla.LinearOperator:
+    def preconditioner(self, previous: "CompletedDoubleLayer | None", kept_for_later: bool = True,
+                       every_body: bool = False) -> spla.LinearOperator:
         """Block Jacobi: the exact inverse of each body's own block (LU), kept for bodies that
         did not change since ``previous``. It takes the ill-conditioning of a body near the wall
         (its own image) out of GMRES: the box-shaped adherent cell's unrefined flat base 0.25 um
@@ -259,14 +260,18 @@ class CompletedDoubleLayer:
         reuses its systems: a held sphere of 768 points at h/a = 1.1 took 1.8 s with its LU
         and 0.31 s in 14 plain GMRES iterations).
         Matrix-free operators assemble each body's block alone for it (DiscreteOperator.
-        diagonal_blocks), so large scenes keep the preconditioner."""
+        diagonal_blocks), so large scenes keep the preconditioner. ``every_body``: factor every
+        body's block whatever its size, for a system solved for many loads (a pair snapshot's 13
+        solves: a refined 5 um cell's block of 3663 unknowns factors in about 1 s, and cuts GMRES
+        from about 30 iterations per solve; dynamics/pairwise.py)."""
         if self.factors is not None:  # built for this system already
             return self._block_jacobi
         old = previous.factors if previous is not None and previous.factors is not None else []
         kept = [p < len(old) and old[p] is not None and self.unchanged[p] and previous.fixed[p] == self.fixed[p]
                 for p in range(len(self.ranges))]
         needed = [p for p, rows in enumerate(self.ranges)
-                  if not kept[p] and ((self.fixed[p] and kept_for_later) or rows.stop - rows.start <= FACTOR_LIMIT)]
+                  if not kept[p] and (every_body or (self.fixed[p] and kept_for_later)
+                                      or rows.stop - rows.start <= FACTOR_LIMIT)]
         blocks = self.double_layer.diagonal_blocks(needed)
         self.factors = [old[p] if kept[p] else
                         scipy.linalg.lu_factor(self.body_block(p, blocks[p]), check_finite=False) if p in blocks else None

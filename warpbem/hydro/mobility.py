@@ -126,7 +126,8 @@ class MobilitySolver:
         return self._mode or "auto (not yet decided)"
 
     def solve(self, bodies, forces=None, torques=None, initial_guess=None,
-              check_placement_first: bool = True, background: bool = True, ambient_flow=None) -> MobilitySolution:
+              check_placement_first: bool = True, background: bool = True, ambient_flow=None,
+              factor_every_body: bool = False) -> MobilitySolution:
         """Solve for the bodies of the moment. ``check_placement_first=False`` skips the overlap
         and wall checks, for callers that have just checked these very bodies (time stepping).
 
@@ -138,7 +139,11 @@ class MobilitySolver:
         ``ambient_flow``: the undisturbed flow in place of the shear flow, a function of the
         collocation points (m, (n, 3)) and the index of each point's body (n,) giving the
         velocity there (m/s, (n, 3)); the flow of frozen adherent cells that are not among the
-        bodies (``frozen.py``). Ignored with ``background=False``."""
+        bodies (``frozen.py``). Ignored with ``background=False``.
+
+        ``factor_every_body``: the block-Jacobi preconditioner factors every body's block, however
+        large (``CompletedDoubleLayer.preconditioner``), for bodies about to be solved for many
+        loads."""
         bodies = checked_bodies(bodies)
         forces = checked_loads("forces", forces, bodies)
         torques = checked_loads("torques", torques, bodies)
@@ -197,7 +202,8 @@ class MobilitySolver:
         if initial_guess is None and previous is not None and background:
             # the previous solution is in the previous scaling: rescale the loads part with it
             initial_guess = system.initial_guess(previous, self._last[1] * (self._last[2] / speed))
-        preconditioner = system.preconditioner(previous, self.keep_systems) if options.precondition else None
+        preconditioner = (system.preconditioner(previous, self.keep_systems, factor_every_body)
+                          if options.precondition else None)
         result = deflated_solve(system.linear_operator(), rhs, options, initial_guess=initial_guess,
                                 preconditioner=preconditioner, exact_preconditioner=system.preconditioner_is_exact())
         x = result.solution
