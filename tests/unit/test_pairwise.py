@@ -32,18 +32,21 @@ def relative_change(a, b):
 
 
 @pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
-@pytest.mark.parametrize("offset", [(-3 * A, 1.5 * A), (3 * A, -1.5 * A), (-3 * A, -1.5 * A)],
-                         ids=["exchanged-and-mirrored", "mirrored", "exchanged"])
-def test_two_cells_from_their_pair_snapshot_are_the_direct_solve(offset):
+@pytest.mark.parametrize("offset, heights", [((-3 * A, 1.5 * A), (9e-9, -7e-9)), ((3 * A, -1.5 * A), (9e-9, -7e-9)),
+                                             ((-3 * A, -1.5 * A), (9e-9, -7e-9)), ((-3 * A, 1.5 * A), (4e-9, 4e-9))],
+                         ids=["exchanged-and-mirrored", "mirrored", "exchanged", "half-turn"])
+def test_two_cells_from_their_pair_snapshot_are_the_direct_solve(offset, heights):
     """For two cells the pairwise sum is exact: M = M_i + (M^(ij) - M_i), so the assembled grand
     mobility and flow motion equal the direct solve of the two, whatever symmetry maps the pair
     to its stored form (the first cell at the origin, the offset in x >= 0, y >= 0): the
     translation along the wall, the exchange of the cells, the mirror y -> -y (forces and
-    velocities change their y components, torques and angular velocities their x and z ones).
-    A wrong sign in any of them changes entries of the size of the coupling (1e-2 here)."""
+    velocities change their y components, torques and angular velocities their x and z ones),
+    and for two cells at one height the half turn that exchanges them (the loads on the second
+    cell from those on the first). A wrong sign in any of them changes entries of the size of
+    the coupling (1e-2 here)."""
     hydro = solves(2, **EXACT, grand_mobility="pairs")
-    bodies = [Body(MESH, position=(0.7e-6, -0.4e-6, HEIGHT + 9e-9)),
-              Body(MESH, position=(0.7e-6 + offset[0], -0.4e-6 + offset[1], HEIGHT - 7e-9))]
+    bodies = [Body(MESH, position=(0.7e-6, -0.4e-6, HEIGHT + heights[0])),
+              Body(MESH, position=(0.7e-6 + offset[0], -0.4e-6 + offset[1], HEIGHT + heights[1]))]
     direct = motion(Motion.of(hydro.mobility.solve(bodies)), hydro._grand_mobility(bodies))
     assembled = motion(*hydro._snapshot(bodies))
     assert max(relative_change(assembled, direct)) < 1e-7

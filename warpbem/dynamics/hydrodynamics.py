@@ -185,16 +185,18 @@ class HydrodynamicSolves:
         return Responses(*stack, load_force, load_torque, sum(s.iterations for s in solves),
                          max(s.residual for s in solves))
 
-    def _grand_mobility(self, bodies, radii=None) -> Responses:
+    def _grand_mobility(self, bodies, radii=None, half_turn: bool = False) -> Responses:
         """The "bodies" basis of the free bodies in ``bodies`` (outer ``radii``, default the
         model's), with their motion taken from the symmetrised grand mobility: the collocation
         discretisation is reciprocal only to its discretisation error (0.5 % in the
         translation-rotation coupling of a 24-element sphere), and a joint step whose rates and
         dissipation came from different halves would hold a cell at rest with a load that is not
-        its holding load."""
+        its holding load. ``half_turn``: two free bodies of one mesh that a half turn about the
+        vertical through their midpoint exchanges (``_half_turn_responses``)."""
         radii = self.model.outer_radii if radii is None else radii
         free = [b for b, body in enumerate(bodies) if not body.fixed]
-        r = self._responses(bodies, *self._body_loads(len(bodies), free, radii))
+        loads = self._body_loads(len(bodies), free, radii)
+        r = self._half_turn_responses(bodies, *loads) if half_turn else self._responses(bodies, *loads)
         q = r.quadratic()
         velocity, angular_velocity = r.velocity.copy(), r.angular_velocity.copy()
         for j, b in enumerate(free):
@@ -202,6 +204,20 @@ class HydrodynamicSolves:
             angular_velocity[:, b] = q[:, 6 * j + 3:6 * j + 6] / radii[b]
         return Responses(velocity, angular_velocity, r.force, r.torque, r.load_force, r.load_torque,
                          r.iterations, r.residual)
+
+    def _half_turn_responses(self, bodies, load_force, load_torque) -> Responses:
+        """The Responses of the 12 basis loads of two free bodies of one mesh, at one height, that
+        the half turn R = diag(-1, -1, 1) about the vertical through their midpoint maps onto each
+        other (a sphere's mesh is symmetric under it, and so are the wall and its refinement):
+        the problem of a load L on body 1 is the turned problem of R L on body 0, so its motion
+        of body b is R times the motion of body 1 - b under R L. The 6 loads on body 1 cost no
+        solve (pairwise.py's pair snapshots; the test there holds it to the direct solve)."""
+        turn = np.array([-1.0, -1.0, 1.0])
+        signs = np.tile(turn, 2)[:, None, None]  # R e_i = turn_i e_i, forces and torques alike
+        half = self._responses(bodies, load_force[:6], load_torque[:6])
+        parts = [np.concatenate([a, signs * turn * a[:, ::-1]]) for a in (half.velocity, half.angular_velocity,
+                                                                         half.force, half.torque)]
+        return Responses(*parts, load_force, load_torque, half.iterations, half.residual)
 
     def _body_loads(self, n, free=None, radii=None):
         """(force, torque) (6 f, n, 3) of the "bodies" basis of the ``free`` ones (default all) of
@@ -262,11 +278,12 @@ class HydrodynamicSolves:
                 raise
             return self._solved([alone], radii)
 
-    def _solved(self, bodies, radii=None):
-        """A snapshot solved at ``bodies``: (flow Motion, grand mobility Responses)."""
+    def _solved(self, bodies, radii=None, half_turn: bool = False):
+        """A snapshot solved at ``bodies``: (flow Motion, grand mobility Responses); ``half_turn``
+        as in ``_grand_mobility``."""
         # the pairs' snapshots factor every block: 13 solves of one system (pairwise.py)
         flow = self.mobility.solve(bodies, check_placement_first=False, factor_every_body=self.pairwise is not None)
-        return Motion.of(flow), self._grand_mobility(bodies, radii)
+        return Motion.of(flow), self._grand_mobility(bodies, radii, half_turn)
 
     def _kept(self, key, snapped, solve, store=None):
         """The snapshot ``key`` from ``store`` (default the whole systems' and lone ones; the

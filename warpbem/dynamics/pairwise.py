@@ -173,8 +173,10 @@ class PairwiseMobility:
         snapped = [Body(bodies[order[0]].mesh, position=(0.0, 0.0, h0)),
                    Body(bodies[order[1]].mesh, position=(offset[0], offset[1], h1))]
         radii = self.radii[list(order)]
+        # two cells of one mesh at one height: a half turn exchanges them, 7 solves instead of 13
+        half_turn = h0 == h1 and snapped[0].mesh is snapped[1].mesh
         try:
-            flow, grand = hydro._kept(key, snapped, lambda b: hydro._solved(b, radii), store=hydro._pairs)
+            flow, grand = hydro._kept(key, snapped, lambda b: hydro._solved(b, radii, half_turn), store=hydro._pairs)
         except TooClose:  # nearer than the lattice allows: the pair solved as it is, not kept
             flow, grand = hydro._solved([bodies[i], bodies[j]], self.radii[[i, j]])
             return (flow.velocity, flow.angular_velocity), (grand.velocity, grand.angular_velocity), (i, j), True
