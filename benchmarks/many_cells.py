@@ -7,11 +7,13 @@
    cells' own positions ("pairwise": the approximation alone) and on the default lattices
    ("pairs, lattices"), and the cells alone (no coupling, for scale); cells in a line along the
    flow and in square patches;
+1b. cut-off: the error of leaving out pairs beyond 50-150 um on an 8 x 8 patch 25 um apart,
+   against every pair;
 2. cost per step: n cells rolling on stiff bonds (the state diagram's rolling point) for a
    short run from the same start, pairs against the whole system's snapshots, wall time and
    snapshots solved; the fitted exponent of the cost per step over n.
 
-    python benchmarks/many_cells.py [--parts accuracy cost] [--quick]
+    python benchmarks/many_cells.py [--parts accuracy cutoff cost] [--quick]
 
 Writes results/bench/many_cells_*.csv and many_cells.png.
 """
@@ -91,6 +93,25 @@ def accuracy(device, cases, k):
     return rows
 
 
+def cutoff_error(device, side, spacing, cutoffs, k):
+    """The error of leaving out pairs beyond each cut-off on a side x side patch at one height,
+    against the pairs without a cut-off (every pair, so no whole-system solve is needed)."""
+    mesh = wb.mesh.sphere(A, k)
+    n = side * side
+    positions = arrangement("patch", n, spacing)
+    positions[:, 2] = REST
+    bodies = [Body(mesh, position=p) for p in positions]
+    hydro = solves(mesh, n, device, reuse_tolerance=2e-9, grand_mobility="pairs", pair_cutoff=1e-2)
+    every = motion(*hydro._snapshot(bodies))
+    rows = []
+    for cutoff in cutoffs:  # the same pair snapshots, fewer of them summed
+        hydro.pairwise.cutoff = cutoff
+        grand, flow = change(motion(*hydro._snapshot(bodies)), every)
+        rows.append(dict(cells=n, spacing_um=spacing * 1e6, cutoff_um=cutoff * 1e6, grand=grand, flow=flow))
+        print_table([rows[-1]])
+    return rows
+
+
 def rolling_patch(n, spacing, mode, k=3, seed=1):
     """(model, state) of n rigid cells rolling on stiff bonds, released at the rest height in a
     line (n <= 3) or a square patch, with ``mode`` "system" or "pairs" snapshots."""
@@ -155,7 +176,7 @@ def cost_chart(rows, path):
 
 def main():
     parser = arguments(__doc__)
-    parser.add_argument("--parts", nargs="+", default=["accuracy"], choices=["accuracy", "cost"])
+    parser.add_argument("--parts", nargs="+", default=["accuracy"], choices=["accuracy", "cutoff", "cost"])
     parser.add_argument("--k", type=int, default=2, help="sphere mesh subdivisions")
     args = parser.parse_args()
     if "accuracy" in args.parts:
@@ -163,6 +184,9 @@ def main():
                  [("line", 3, 12e-6), ("line", 3, 25e-6), ("patch", 4, 25e-6), ("patch", 9, 25e-6)])
         rows = accuracy(args.device, cases, args.k)
         print(f"wrote {write_csv('many_cells_accuracy.csv', rows)}")
+    if "cutoff" in args.parts:
+        rows = cutoff_error(args.device, 4 if args.quick else 8, 25e-6, [50e-6, 75e-6, 100e-6, 150e-6], args.k)
+        print(f"wrote {write_csv('many_cells_cutoff.csv', rows)}")
     if "cost" in args.parts:
         counts, system_counts, end = ([1, 3], [3], 5e-4) if args.quick else ([1, 3, 8, 16, 64], [3], 2e-3)
         rows = cost(args.device, counts, system_counts, 25e-6, end)

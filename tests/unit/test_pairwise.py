@@ -10,6 +10,7 @@ from warpbem.dynamics.model import Flow, Model, SolverOptions, build_solver
 from warpbem.dynamics.pairwise import lateral_spacing, pair_key
 from warpbem.options import OptionError
 from warpbem.surfaces.body import Body
+from tests.interrupted import run_killed_after
 
 A = 2e-6
 MESH = wb.mesh.sphere(A, 2)
@@ -104,10 +105,6 @@ mesh = { shape = "sphere", radius = 2.0e-6, subdivisions = 2 }
 """
 
 
-class Stop(Exception):
-    pass
-
-
 @pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
 def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_path):
     """Two adhesive cells on pair snapshots: a second run with the same seed repeats the first
@@ -121,15 +118,7 @@ def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_pa
     path.write_text(PAIRS_SCENE)
     run.run(path, tmp_path / "straight.h5", progress=lambda line: None)
     run.run(path, tmp_path / "again.h5", progress=lambda line: None)
-    seen = []
-
-    def stop(line):
-        seen.append(line)
-        if len(seen) == 2:
-            raise Stop
-
-    with pytest.raises(Stop):
-        run.run(path, tmp_path / "killed.h5", progress=stop)
+    run_killed_after(2, path, tmp_path / "killed.h5")
     run.run(None, tmp_path / "killed.h5", resume=True, progress=lambda line: None)
     import h5py
 

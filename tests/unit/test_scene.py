@@ -8,6 +8,7 @@ import pytest
 
 from warpbem import mesh
 from warpbem.app import run, scene
+from tests.interrupted import run_killed_after
 from tests.scene_points import sweep_scenes
 
 BASE = {
@@ -109,19 +110,7 @@ def test_overrides_and_mesh_files(tmp_path):
 def test_interrupted_run_resumes_to_the_same_end(tmp_path):
     path = write(tmp_path, BASE)
     straight = run.run(path, tmp_path / "straight.h5", progress=lambda line: None)
-
-    class Stop(Exception):
-        pass
-
-    frames = []
-
-    def interrupt(line):
-        frames.append(line)
-        if len(frames) == 2:
-            raise Stop
-
-    with pytest.raises(Stop):
-        run.run(path, tmp_path / "resumed.h5", progress=interrupt)
+    run_killed_after(2, path, tmp_path / "resumed.h5")
     with h5py.File(tmp_path / "resumed.h5") as f:
         assert f["time"].shape[0] == 3  # frame 0 and the two frames written before the interruption
     resumed = run.run(None, tmp_path / "resumed.h5", resume=True, progress=lambda line: None)

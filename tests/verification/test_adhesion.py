@@ -23,6 +23,7 @@ from warpbem.forces.external import STANDARD_GRAVITY, Gravity
 from warpbem.forces.repulsion import Repulsion
 from warpbem.surfaces.body import Body
 from warpbem.surfaces.gaps import Contacts, GapFinder
+from tests.interrupted import run_killed_after
 
 A = 2e-6
 MESH = wb.mesh.sphere(A, 2)
@@ -206,10 +207,6 @@ mesh = { shape = "sphere", radius = 2.0e-6, subdivisions = 2 }
 """
 
 
-class Stop(Exception):
-    pass
-
-
 @pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
 def test_a_resumed_adhesive_run_reproduces_the_uninterrupted_one(tmp_path):
     """Killed after 3 frames and resumed: the bonds, positions and the Monte Carlo stream
@@ -218,15 +215,7 @@ def test_a_resumed_adhesive_run_reproduces_the_uninterrupted_one(tmp_path):
     path = tmp_path / "bonds.toml"
     path.write_text(SCENE)
     run.run(path, tmp_path / "straight.h5", progress=lambda line: None)
-    seen = []
-
-    def stop(line):
-        seen.append(line)
-        if len(seen) == 3:
-            raise Stop
-
-    with pytest.raises(Stop):
-        run.run(path, tmp_path / "killed.h5", progress=stop)
+    run_killed_after(3, path, tmp_path / "killed.h5")
     run.run(None, tmp_path / "killed.h5", resume=True, progress=lambda line: None)
     with h5py.File(tmp_path / "killed.h5") as f, h5py.File(tmp_path / "straight.h5") as g:
         assert f.attrs["seed"] == 3

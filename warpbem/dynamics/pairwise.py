@@ -14,10 +14,12 @@ alone above the wall, on the pair lattice (heights h* to ``reuse_interaction``, 
 system's snapshot; the lateral offset on a lattice whose spacing grows with the distance,
 below), and the flow's motion alike. What it leaves out is the three-body part: the third
 cell's answer to the flow of the two. Side by side with the whole-system solve
-(``benchmarks/many_cells.py``, part 1) it errs by about 4e-4 of the largest entry on three cells
-25 um apart in a line, and by 3.5e-2 at 12 um (2 um between the surfaces, where the middle cell
-screens the outer two), so the pairs serve patches of cells tens of micrometres apart and the
-whole system's snapshot close trains (the default).
+(``benchmarks/many_cells.py``, part 1; largest change over largest entry) it errs by 3.6e-4 in
+the grand mobility and 9.3e-4 in the motion in the flow on three cells 25 um apart in a line,
+by 1.6e-3 and 7.5e-3 in a 3 x 3 patch 25 um apart (the middle cell shielded by eight
+neighbours), and by 3.5e-2 at 12 um in a line (2 um between the surfaces, where the middle cell
+screens the outer two). So the pairs serve lines and sparse patches of cells tens of
+micrometres apart, and the whole system's snapshot close trains (the default).
 
 A pair above the wall in shear is invariant under translation along the wall, so its snapshot
 is computed with its first cell at x = y = 0 and shared by every pair of cells of the same

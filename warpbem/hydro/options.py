@@ -36,9 +36,12 @@ DEFAULT_TOLERANCE = {"float64": 1e-8, "float32": 1e-6}
 DEFAULT_CUTOFF = 40e-6
 NEAR_FAR_SPLITS = ("auto", "on", "off")
 GRAND_MOBILITIES = ("system", "pairs")
-# m: the pair lattice at contact distance (dynamics/pairwise.py); placeholder until measured
+# m: the pair lattice at contact distance (dynamics/pairwise.py), 320 nm at 25 um between 5 um
+# cells: with the heights' lattice it adds 4e-4 to the grand mobility's error on three cells in a
+# line 25 um apart (benchmarks/many_cells.py part 1: 8.0e-4 against 3.6e-4 at their own positions)
 DEFAULT_PAIR_LATERAL = 10e-9
-# m: pairs of cells farther apart than this are left out (dynamics/pairwise.py); placeholder until measured
+# m: pairs of cells farther apart than this are left out (dynamics/pairwise.py): every pair of an
+# 8 x 8 patch 25 um apart within four pitches
 DEFAULT_PAIR_CUTOFF = 100e-6
 # fixed cells from which "auto" switches the near-far split on: per step on the crossing path
 # (benchmarks/frozen.py steps --counts 1 2 3 4 5 --full; docs/figures/frozen_steps_notes.md) the
@@ -106,8 +109,10 @@ class SolverOptions:
     grand_mobility: str = option("system", "several free cells' snapshots: 'system' (the whole system's, 6 n + 1"
                                  " solves of n cells) or 'pairs' (each cell's lone snapshot and the two-body"
                                  " snapshots of every pair within pair_cutoff, shared by pairs of the same offset and"
-                                 " heights: a cost linear in the cells, for cells tens of micrometres apart;"
-                                 " dynamics/pairwise.py, README 'Many adhesive cells')", choices=GRAND_MOBILITIES)
+                                 " heights: a cost linear in the cells, for free spherical cells tens of"
+                                 " micrometres apart, leaving out the three-body part: 9.3e-4 of the flow's motion"
+                                 " in a line 25 um apart, 7.5e-3 in a 3 x 3 patch; dynamics/pairwise.py, README"
+                                 " 'Many adhesive cells')", choices=GRAND_MOBILITIES)
     pair_lateral: float = option(DEFAULT_PAIR_LATERAL, "with grand_mobility = 'pairs', the lateral lattice of the pair"
                                  " snapshots at contact distance, growing as (distance / contact)^4 in steps of 2",
                                  "m", low=0.0, high=1e-5, low_open=True)
