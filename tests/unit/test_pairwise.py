@@ -55,11 +55,15 @@ def test_two_cells_from_their_pair_snapshot_are_the_direct_solve(offset, heights
     assert min(relative_change(alone, direct)) > 1e-3  # the coupling the check would miss
 
 
-def test_the_pair_lattice_grows_as_the_fourth_power_of_the_distance_in_steps_of_2():
+def test_the_pair_lattice_grows_as_the_fourth_power_of_the_distance_in_steps_of_2_up_to_an_eighth_of_it():
     contact = 2 * A
     assert lateral_spacing(1.5 * A, 10e-9, contact) == 10e-9  # below contact distance: the base
     assert lateral_spacing(2 * contact, 10e-9, contact) == 10e-9 * 16  # (r / contact)^4 = 16
     assert lateral_spacing(2.5 * contact, 10e-9, contact) == 10e-9 * 32  # 39.06 -> 32
+    # and at most 1/8 of the distance: far pairs are never snapped onto one another
+    for distance in (10 * contact, 60 * contact, 1e-2):
+        assert lateral_spacing(distance, 10e-9, contact) <= distance / 8
+        assert lateral_spacing(distance, 10e-9, contact) > distance / 16
     # the same pair seen from either cell, or mirrored, has one key
     keys = {pair_key(np.array(o), (HEIGHT, HEIGHT), (0, 0), 10e-9, contact)[0]
             for o in ((5 * A, 1 * A), (-5 * A, -1 * A), (5 * A, -1 * A), (-5 * A, 1 * A))}

@@ -29,8 +29,8 @@ sign of their y components, torques and angular velocities of their x and z ones
 offset is stored with x >= 0 and y >= 0. The coupling between two cells at the wall falls as
 the cube of their distance r (a wall-parallel Stokeslet is felt as h z / r^3 along the wall,
 Blake 1971) and its change with the offset as r^-4, so the lateral lattice spacing grows as
-(r / r0)^4 from ``pair_lateral`` at r0 = the sum of the outer radii (contact), in steps of 2:
-the snapping error is then about the same at every distance. Pairs farther apart than
+(r / r0)^4 from ``pair_lateral`` at r0 = the sum of the outer radii (contact), in steps of 2
+and at most r / 8: the snapping error is then about the same at every distance. Pairs farther apart than
 ``pair_cutoff`` are left out.
 """
 
@@ -49,16 +49,24 @@ MIRROR_VELOCITY = np.array([1.0, -1.0, 1.0])
 MIRROR_ANGULAR = -MIRROR_VELOCITY
 
 
+# the pair lattice is at most this many times finer than the pair's distance (lateral_spacing)
+WIDEST_SHARE = 8.0
+
+
 class TooClose(Exception):
     """A snapped configuration is not a valid placement (a gap below the lattice spacing)."""
 
 
 def lateral_spacing(distance: float, base: float, contact: float) -> float:
     """The pair lattice's spacing (m) at lateral ``distance`` (m): ``base`` times the largest
-    power of 2 not above (distance / contact)^4 (module docstring)."""
+    power of 2 not above (distance / contact)^4 (module docstring), nor above distance /
+    (8 base): the coupling's linear change with the offset, which the r^4 law assumes, does not
+    reach across a lattice as wide as the distance itself (without the cap two cells 247 um apart
+    would be snapped onto one another)."""
     if distance <= contact:
         return base
-    return base * 2.0 ** math.floor(4.0 * math.log2(distance / contact))
+    level = min(4.0 * math.log2(distance / contact), math.log2(distance / (WIDEST_SHARE * base)))
+    return base * 2.0 ** max(0, math.floor(level))
 
 
 def pair_key(offset, heights, meshes, base: float, contact: float):
