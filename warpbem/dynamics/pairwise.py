@@ -30,8 +30,9 @@ offset is stored with x >= 0 and y >= 0. The coupling between two cells at the w
 the cube of their distance r (a wall-parallel Stokeslet is felt as h z / r^3 along the wall,
 Blake 1971) and its change with the offset as r^-4, so the lateral lattice spacing grows as
 (r / r0)^4 from ``pair_lateral`` at r0 = the sum of the outer radii (contact), in steps of 2
-and at most r / 8: the snapping error is then about the same at every distance. Pairs farther apart than
-``pair_cutoff`` are left out.
+and at most r / 8: the snapping error is then about the same at every distance. Pairs farther
+apart than ``pair_cutoff`` are left out; the flow's coupling sums slowly over a patch (r^-3 per
+pair, r pairs per ring), so the default keeps every pair of a patch up to 1 mm wide.
 """
 
 from __future__ import annotations

@@ -40,9 +40,12 @@ GRAND_MOBILITIES = ("system", "pairs")
 # cells: with the heights' lattice it adds 4e-4 to the grand mobility's error on three cells in a
 # line 25 um apart (benchmarks/many_cells.py part 1: 8.0e-4 against 3.6e-4 at their own positions)
 DEFAULT_PAIR_LATERAL = 10e-9
-# m: pairs of cells farther apart than this are left out (dynamics/pairwise.py): every pair of an
-# 8 x 8 patch 25 um apart within four pitches
-DEFAULT_PAIR_CUTOFF = 100e-6
+# m: pairs of cells farther apart than this are left out (dynamics/pairwise.py). The flow's part of
+# the coupling sums slowly over a patch (each pair's as r^-3, their number as r): on an 8 x 8 patch
+# 25 um apart leaving out pairs beyond 50 / 100 / 150 um errs by 7.0e-2 / 1.3e-2 / 3.8e-3 in the
+# flow's motion (benchmarks/many_cells.py --parts cutoff), so every pair of a patch up to 1 mm wide
+# is kept
+DEFAULT_PAIR_CUTOFF = 1e-3
 # fixed cells from which "auto" switches the near-far split on: per step on the crossing path
 # (benchmarks/frozen.py steps --counts 1 2 3 4 5 --full; docs/figures/frozen_steps_notes.md) the
 # split cost as much as the full solve up to 4 x 4 domes (2.11 against 2.12 s at 16) and 35-40 %
