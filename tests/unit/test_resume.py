@@ -12,33 +12,18 @@ import pytest
 
 from warpbem.app import cli, run, scene, sweep
 
+from tests.interrupted import run_killed_after
+
 from .test_scene import BASE, write
 
 A = 5e-6
-
-
-class Stop(Exception):
-    pass
-
-
-def interrupted_run(path, out, frames):
-    """Run ``path`` into ``out``, interrupted after ``frames`` progress lines (frames)."""
-    seen = []
-
-    def stop_after(line):
-        seen.append(line)
-        if len(seen) == frames:
-            raise Stop
-
-    with pytest.raises(Stop):
-        run.run(path, out, progress=stop_after)
 
 
 def test_a_run_killed_between_column_writes_resumes_to_the_uninterrupted_one(tmp_path):
     path = write(tmp_path, BASE)
     straight = run.run(path, tmp_path / "straight.h5", progress=lambda line: None)
     out = tmp_path / "killed.h5"
-    interrupted_run(path, out, 1)
+    run_killed_after(1, path, out)
     with h5py.File(out, "a") as f:  # died while writing frame 2: two columns have it, the rest do not
         assert f["time"].shape == (2,)
         for name, value in (("time", 123.0), ("position", np.zeros((1, 3)))):
