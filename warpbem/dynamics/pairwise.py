@@ -145,12 +145,14 @@ class PairwiseMobility:
             return self._cached
         velocity, angular = np.zeros((n, 3)), np.zeros((n, 3))
         basis_velocity, basis_angular = np.zeros((6 * n, n, 3)), np.zeros((6 * n, n, 3))
-        exact = False
+        exact, coarse = False, {}  # each cell's lone snapshot at its pair height, looked up once
         for entry in entries:
             (flow_v, flow_w), (grand_v, grand_w), order, solved_as_is = self._pair_values(bodies, *entry)
             exact |= solved_as_is
             for a, b in enumerate(order):
-                lone_flow, lone_grand = self.hydro._lone(b, bodies[b], self.hydro.interaction, exact_if_too_close=True)
+                if b not in coarse:
+                    coarse[b] = self.hydro._lone(b, bodies[b], self.hydro.interaction, exact_if_too_close=True)
+                lone_flow, lone_grand = coarse[b]
                 velocity[b] += flow_v[a] - lone_flow.velocity[0]
                 angular[b] += flow_w[a] - lone_flow.angular_velocity[0]
                 for c, other in enumerate(order):
