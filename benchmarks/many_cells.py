@@ -9,11 +9,15 @@
    flow and in square patches;
 1b. cut-off: the error of leaving out pairs beyond 50-150 um on an 8 x 8 patch 25 um apart,
    against every pair;
+1c. lattice: two cells (where the pairs are exact) at 12.5-40 um along a line 30 degrees off the
+   flow, the pair's snapshot interpolated bilinearly between the points of its lattice (as the
+   pairs do) and taken from the nearest point instead, against the direct solve, for lattices of
+   several spacings;
 2. cost per step: n cells rolling on stiff bonds (the state diagram's rolling point) for a
    short run from the same start, pairs against the whole system's snapshots, wall time and
    snapshots solved; the fitted exponent of the cost per step over n.
 
-    python benchmarks/many_cells.py [--parts accuracy cutoff cost] [--quick]
+    python benchmarks/many_cells.py [--parts accuracy cutoff lattice cost] [--quick]
 
 Writes results/bench/many_cells_*.csv and many_cells.png.
 """
@@ -27,6 +31,7 @@ import warpbem as wb
 from common import arguments, output as output_path, print_table, pyplot, save_chart, write_csv
 from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion
 from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy, build_solver
+from warpbem.dynamics.pairwise import lateral_spacing
 from warpbem.dynamics.simulator import Simulator
 from warpbem.forces.adhesion import Adhesion
 from warpbem.forces.bond_model import BondOptions
@@ -112,6 +117,31 @@ def cutoff_error(device, side, spacing, cutoffs, k):
     return rows
 
 
+def lattice_error(device, distances, bases, k):
+    """The lattice's error on two cells at one height: the pair's snapshot interpolated (the
+    pairs' rule) and at the nearest lattice point, against the direct solve, for each ``base``
+    (pair_lateral; the lattice spacing at each distance follows from it)."""
+    mesh = wb.mesh.sphere(A, k)
+    direction = np.array([np.cos(np.pi / 6), np.sin(np.pi / 6)])
+    rows = []
+    for distance in distances:
+        offset = distance * direction
+        bodies = [Body(mesh, position=(0.0, 0.0, REST)), Body(mesh, position=(*offset, REST))]
+        direct_solves = solves(mesh, 2, device)
+        exact = motion(Motion.of(direct_solves.mobility.solve(bodies)), direct_solves._grand_mobility(bodies))
+        for base in bases:
+            hydro = solves(mesh, 2, device, reuse_tolerance=1e-12, reuse_interaction=1e-12, grand_mobility="pairs",
+                           pair_lateral=base)
+            spacing = lateral_spacing(distance, base, 2 * A)
+            interpolated = max(change(motion(*hydro._snapshot(bodies)), exact))
+            nearest = [bodies[0], Body(mesh, position=(*(np.round(offset / spacing) * spacing), REST))]
+            snapped = max(change(motion(*hydro._snapshot(nearest)), exact))  # a corner above: no new solve
+            rows.append(dict(distance_um=distance * 1e6, pair_lateral_nm=base * 1e9, spacing_nm=spacing * 1e9,
+                             interpolated=interpolated, nearest_point=snapped, snapshots=hydro.snapshots_solved))
+            print_table([rows[-1]])
+    return rows
+
+
 def rolling_patch(n, spacing, mode, k=3, seed=1):
     """(model, state) of n rigid cells rolling on stiff bonds, released at the rest height in a
     line (n <= 3) or a square patch, with ``mode`` "system" or "pairs" snapshots."""
@@ -176,7 +206,7 @@ def cost_chart(rows, path):
 
 def main():
     parser = arguments(__doc__)
-    parser.add_argument("--parts", nargs="+", default=["accuracy"], choices=["accuracy", "cutoff", "cost"])
+    parser.add_argument("--parts", nargs="+", default=["accuracy"], choices=["accuracy", "cutoff", "lattice", "cost"])
     parser.add_argument("--k", type=int, default=2, help="sphere mesh subdivisions")
     args = parser.parse_args()
     if "accuracy" in args.parts:
@@ -187,6 +217,11 @@ def main():
     if "cutoff" in args.parts:
         rows = cutoff_error(args.device, 4 if args.quick else 8, 25e-6, [50e-6, 75e-6, 100e-6, 150e-6], args.k)
         print(f"wrote {write_csv('many_cells_cutoff.csv', rows)}")
+    if "lattice" in args.parts:
+        distances, bases = ([12.5e-6], [250e-9, 500e-9]) if args.quick else ([12.5e-6, 15e-6, 25e-6, 40e-6],
+                                                                            [125e-9, 250e-9, 500e-9, 1e-6])
+        rows = lattice_error(args.device, distances, bases, args.k)
+        print(f"wrote {write_csv('many_cells_lattice.csv', rows)}")
     if "cost" in args.parts:
         counts, system_counts, end = ([1, 3], [3], 5e-4) if args.quick else ([1, 3, 8, 16, 64], [3], 2e-3)
         rows = cost(args.device, counts, system_counts, 25e-6, end)

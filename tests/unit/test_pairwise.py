@@ -7,7 +7,7 @@ import pytest
 import warpbem as wb
 from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion
 from warpbem.dynamics.model import Flow, Model, SolverOptions, build_solver
-from warpbem.dynamics.pairwise import lateral_spacing, pair_key
+from warpbem.dynamics.pairwise import lateral_spacing, lattice_corners, pair_key
 from warpbem.options import OptionError
 from warpbem.surfaces.body import Body
 from tests.interrupted import run_killed_after
@@ -55,19 +55,55 @@ def test_two_cells_from_their_pair_snapshot_are_the_direct_solve(offset, heights
     assert min(relative_change(alone, direct)) > 1e-3  # the coupling the check would miss
 
 
-def test_the_pair_lattice_grows_as_the_fourth_power_of_the_distance_in_steps_of_2_up_to_an_eighth_of_it():
+def test_the_pair_lattice_grows_as_the_distance_to_the_five_halves_in_steps_of_2_up_to_an_eighth_of_it():
     contact = 2 * A
     assert lateral_spacing(1.5 * A, 10e-9, contact) == 10e-9  # below contact distance: the base
-    assert lateral_spacing(2 * contact, 10e-9, contact) == 10e-9 * 16  # (r / contact)^4 = 16
-    assert lateral_spacing(2.5 * contact, 10e-9, contact) == 10e-9 * 32  # 39.06 -> 32
-    # and at most 1/8 of the distance: far pairs are never snapped onto one another
+    assert lateral_spacing(2 * contact, 10e-9, contact) == 10e-9 * 4  # (r / contact)^2.5 = 5.66 -> 4
+    assert lateral_spacing(2.5 * contact, 10e-9, contact) == 10e-9 * 8  # 9.88 -> 8
+    # and at most 1/8 of the distance: far pairs are never interpolated across the distance itself
     for distance in (10 * contact, 60 * contact, 1e-2):
         assert lateral_spacing(distance, 10e-9, contact) <= distance / 8
         assert lateral_spacing(distance, 10e-9, contact) > distance / 16
-    # the same pair seen from either cell, or mirrored, has one key
-    keys = {pair_key(np.array(o), (HEIGHT, HEIGHT), (0, 0), 10e-9, contact)[0]
-            for o in ((5 * A, 1 * A), (-5 * A, -1 * A), (5 * A, -1 * A), (-5 * A, 1 * A))}
+    # the same lattice point seen from either cell, or mirrored, has one key
+    keys = {pair_key(np.array(point), 10e-9, (HEIGHT, HEIGHT), (0, 0))[0]
+            for point in ((5, 1), (-5, -1), (5, -1), (-5, 1))}
     assert len(keys) == 1
+
+
+def test_the_bilinear_weights_sum_to_one_and_leave_out_points_of_weight_zero():
+    corners = {tuple(p): w for w, p in lattice_corners((3.25e-6, -1.5e-6), 1e-6)}
+    assert corners == pytest.approx({(3, -2): 0.375, (3, -1): 0.375, (4, -2): 0.125, (4, -1): 0.125})
+    on_a_line = {tuple(p): w for w, p in lattice_corners((3.25e-6, 2e-6), 1e-6)}
+    assert on_a_line == pytest.approx({(3, 2): 0.75, (4, 2): 0.25})
+    assert len(lattice_corners((3e-6, 2e-6), 1e-6)) == 1  # on a lattice point: that point alone
+
+
+@pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
+def test_between_lattice_points_the_pair_is_interpolated_to_second_order_in_the_spacing():
+    """Between its lattice points a pair's snapshot is the bilinear interpolation of theirs,
+    whose error at fractions t, u of the lattice square is -(s^2 / 2) [t (1 - t) f_xx + u (1 - u)
+    f_yy] + O(s^3) (the interpolation remainder), second order in the spacing s, where the
+    nearest point's is first order. The offset (-6133, 1333) nm lies at fractions 2/3, 1/3 of
+    the 400 nm lattice and 1/3, 2/3 of the 200 nm one (t (1 - t) = 2/9 in both), so halving the
+    spacing must cut the error 4 times (3-5 allowed for the O(s^3) rest); the lattice points are
+    exchanged and mirrored ones (x < 0, then y < 0), so their signs are checked too."""
+    offset = np.array([-6133.333333e-9, 1333.333333e-9])
+    bodies = [Body(MESH, position=(0.3e-6, 0.2e-6, HEIGHT)), Body(MESH, position=(0.3e-6 + offset[0], 0.2e-6 + offset[1],
+                                                                                 HEIGHT + 11e-9))]
+    exact_heights = dict(reuse_tolerance=1e-12, reuse_interaction=1e-12, grand_mobility="pairs")
+    hydro = solves(2, **exact_heights, pair_lateral=1e-12)
+    direct = motion(Motion.of(hydro.mobility.solve(bodies)), hydro._grand_mobility(bodies))
+    errors = {}
+    for base in (200e-9, 100e-9):  # lattices of 400 and 200 nm at this distance
+        assert lateral_spacing(np.hypot(*offset), base, 2 * A) == 2 * base
+        errors[base] = max(relative_change(motion(*solves(2, **exact_heights, pair_lateral=base)._snapshot(bodies)),
+                                           direct))
+    nearest = [Body(MESH, position=bodies[0].position),
+               Body(MESH, position=bodies[0].position + np.append(np.round(offset / 200e-9) * 200e-9, 11e-9))]
+    snapped = max(relative_change(motion(Motion.of(hydro.mobility.solve(nearest)), hydro._grand_mobility(nearest)),
+                                  direct))
+    assert 3.0 < errors[200e-9] / errors[100e-9] < 5.0
+    assert errors[100e-9] < snapped / 10  # the nearest point of the finer lattice, 67 nm away, errs 10x more
 
 
 def test_pairs_refuse_fixed_and_non_spherical_cells_and_no_snapshots():
@@ -110,16 +146,20 @@ mesh = { shape = "sphere", radius = 2.0e-6, subdivisions = 2 }
 
 
 @pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
-def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_path):
-    """Two adhesive cells on pair snapshots: a second run with the same seed repeats the first
-    bit for bit (the pairs' part is a function of the lattice points alone, so its cache changes
-    no number), and a run killed after 2 frames and resumed forms the same bonds and ends within
-    1e-9 radii of where the uninterrupted one ends (as one cell's, test_adhesion.py: its solves
-    start GMRES from another previous solution)."""
+@pytest.mark.parametrize("count, pitch", [((2, 1), (10e-6, 0.0)), ((4, 4), (10e-6, 10e-6))],
+                         ids=["two cells", "a 4 x 4 patch"])
+def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_path, count, pitch):
+    """Adhesive cells on pair snapshots (two, and sixteen in a patch): a second run with the
+    same seed repeats the first bit for bit (the pairs' part is a function of the state alone:
+    the lattice points' snapshots and their weights, so which snapshots a run happens to keep
+    changes no number), and a run killed after 2 frames and resumed forms the same bonds and ends
+    within 1e-9 radii of where the uninterrupted one ends (as one cell's, test_adhesion.py: its
+    solves start GMRES from another previous solution)."""
     from warpbem.app import run
 
     path = tmp_path / "pairs.toml"
-    path.write_text(PAIRS_SCENE)
+    path.write_text(PAIRS_SCENE.replace("count = [2, 1]", f"count = [{count[0]}, {count[1]}]")
+                    .replace("pitch = [10.0e-6, 0.0]", f"pitch = [{pitch[0]}, {pitch[1]}]"))
     run.run(path, tmp_path / "straight.h5", progress=lambda line: None)
     run.run(path, tmp_path / "again.h5", progress=lambda line: None)
     run_killed_after(2, path, tmp_path / "killed.h5")
@@ -129,7 +169,8 @@ def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_pa
     with h5py.File(tmp_path / "killed.h5") as f, h5py.File(tmp_path / "straight.h5") as g, \
             h5py.File(tmp_path / "again.h5") as h:
         assert f["time"].shape == g["time"].shape == (5,)
-        assert g["bond_count"][-1].sum() > 0
+        assert g["position"].shape[1] == count[0] * count[1]
+        assert np.all(g["bond_count"][-1] > 0)  # every cell bound: each one's kinetics is compared
         for name in ("position", "velocity", "bond_receptor", "bond_count"):
             np.testing.assert_array_equal(h[name][:], g[name][:])
         np.testing.assert_array_equal(f["bond_receptor"][:], g["bond_receptor"][:])

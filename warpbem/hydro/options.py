@@ -36,10 +36,11 @@ DEFAULT_TOLERANCE = {"float64": 1e-8, "float32": 1e-6}
 DEFAULT_CUTOFF = 40e-6
 NEAR_FAR_SPLITS = ("auto", "on", "off")
 GRAND_MOBILITIES = ("system", "pairs")
-# m: the pair lattice at contact distance (dynamics/pairwise.py), 320 nm at 25 um between 5 um
-# cells: with the heights' lattice it adds 4e-4 to the grand mobility's error on three cells in a
-# line 25 um apart (benchmarks/many_cells.py part 1: 8.0e-4 against 3.6e-4 at their own positions)
-DEFAULT_PAIR_LATERAL = 10e-9
+# m: the pair lattice at contact distance (dynamics/pairwise.py), interpolated bilinearly: 250 nm
+# up to 1.32 contact distances (13.2 um between 5 um cells), 2 um at 25 um; two cells 12.5 um
+# apart interpolate to 3.4e-4 of the grand mobility on a 500 nm lattice, 1.6e-3 on a 1 um one
+# (benchmarks/many_cells.py --parts lattice)
+DEFAULT_PAIR_LATERAL = 250e-9
 # m: pairs of cells farther apart than this are left out (dynamics/pairwise.py). The flow's part of
 # the coupling sums slowly over a patch (each pair's as r^-3, their number as r): on an 8 x 8 patch
 # 25 um apart leaving out pairs beyond 50 / 100 / 150 um errs by 7.0e-2 / 1.3e-2 / 3.8e-3 in the
@@ -117,7 +118,8 @@ class SolverOptions:
                                  " in a line 25 um apart, 7.5e-3 in a 3 x 3 patch; dynamics/pairwise.py, README"
                                  " 'Many adhesive cells')", choices=GRAND_MOBILITIES)
     pair_lateral: float = option(DEFAULT_PAIR_LATERAL, "with grand_mobility = 'pairs', the lateral lattice of the pair"
-                                 " snapshots at contact distance, growing as (distance / contact)^4 in steps of 2",
+                                 " snapshots at contact distance, growing as (distance / contact)^(5/2) in steps of 2"
+                                 " up to distance / 8; each pair interpolated bilinearly between its lattice points",
                                  "m", low=0.0, high=1e-5, low_open=True)
     pair_cutoff: float = option(DEFAULT_PAIR_CUTOFF, "with grand_mobility = 'pairs', pairs of cells farther apart"
                                 " along the wall than this do not interact", "m", low=0.0, high=1e-2)
