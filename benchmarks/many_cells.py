@@ -13,15 +13,22 @@
    flow, the pair's snapshot interpolated bilinearly between the points of its lattice (as the
    pairs do) and taken from the nearest point instead, against the direct solve, for lattices of
    several spacings;
+1d. reuse: the pair lattice points a run's frames visit (``--runs RUN.h5 ...``, runs of free
+   spherical cells on pairs): the interpolation's four around each pair's offset on the lattice
+   that grows as distance^(5/2) from 250 nm (the pairs' rule), against the nearest point of the
+   distance^4 lattice from 10 nm that the pairs snapped to before, heights on the pair height
+   lattice in both. Counted at the frames only (the steps between them visit more points, the
+   finer lattice more of them), so both counts are lower bounds;
 2. cost per step: n cells rolling on stiff bonds (the state diagram's rolling point) for a
    short run from the same start, pairs against the whole system's snapshots, wall time and
    snapshots solved; the fitted exponent of the cost per step over n.
 
-    python benchmarks/many_cells.py [--parts accuracy cutoff lattice cost] [--quick]
+    python benchmarks/many_cells.py [--parts accuracy cutoff lattice reuse cost] [--runs RUN.h5 ...] [--quick]
 
 Writes results/bench/many_cells_*.csv and many_cells.png.
 """
 
+import json
 import time
 import warnings
 
@@ -142,6 +149,44 @@ def lattice_error(device, distances, bases, k):
     return rows
 
 
+def visited_points(path, interaction=20e-9):
+    """(points the interpolation visits, points the nearest-point rule visits, pairs, frames) of
+    a run's frames (module docstring, 1d): lattice points as (heights, spacing, point) of each
+    pair, the same pair key modulo the symmetries as the pairs' store."""
+    from warpbem.app.io import open_result
+    from warpbem.dynamics.pairwise import canonical, lattice_corners
+
+    with open_result(path) as f:
+        positions = f["position"][:]
+        scene = json.loads(f.attrs["scene"])
+    meshes = [b["mesh"] for b in scene.get("bodies", [])] + [a["mesh"] for a in scene.get("arrays", [])]
+    if any(m.get("shape") != "sphere" or m.get("radius") != A for m in meshes):
+        raise SystemExit(f"{path}: --parts reuse counts runs of {A * 1e6:g} um spheres only")
+    radii = np.full(positions.shape[1], A)
+    interpolated, nearest = set(), set()
+    first, second = np.triu_indices(positions.shape[1], 1)
+    contact = radii[first] + radii[second]
+
+    def stored(points, spacings, heights):
+        points, heights, _, _, _ = canonical(points, heights, np.zeros((len(points), 2), int))
+        return set(zip(heights[:, 0], heights[:, 1], spacings, points[:, 0], points[:, 1]))
+
+    for frame in positions:
+        heights = np.round(frame[:, 2] / interaction) * interaction
+        hs = np.stack([heights[first], heights[second]], axis=1)
+        offsets = frame[second, :2] - frame[first, :2]
+        distance = np.hypot(offsets[:, 0], offsets[:, 1])
+        spacings = lateral_spacing(distance, 250e-9, contact)
+        points, weights = lattice_corners(offsets, spacings)
+        used, corner = np.nonzero(weights > 0)
+        interpolated |= stored(points[used, corner], spacings[used], hs[used])
+        # the rule before: the nearest point of a lattice growing as distance^4 from 10 nm
+        level = np.minimum(4.0 * np.log2(np.maximum(distance, contact) / contact), np.log2(distance / (8 * 10e-9)))
+        fine = 10e-9 * 2.0 ** np.maximum(0, np.floor(level))
+        nearest |= stored(np.round(offsets / fine[:, None]).astype(int), fine, hs)
+    return len(interpolated), len(nearest), len(first), len(positions)
+
+
 def rolling_patch(n, spacing, mode, k=3, seed=1):
     """(model, state) of n rigid cells rolling on stiff bonds, released at the rest height in a
     line (n <= 3) or a square patch, with ``mode`` "system" or "pairs" snapshots."""
@@ -206,7 +251,8 @@ def cost_chart(rows, path):
 
 def main():
     parser = arguments(__doc__)
-    parser.add_argument("--parts", nargs="+", default=["accuracy"], choices=["accuracy", "cutoff", "lattice", "cost"])
+    parser.add_argument("--parts", nargs="+", default=["accuracy"], choices=["accuracy", "cutoff", "lattice", "reuse", "cost"])
+    parser.add_argument("--runs", nargs="*", default=[], help="run files for --parts reuse")
     parser.add_argument("--k", type=int, default=2, help="sphere mesh subdivisions")
     args = parser.parse_args()
     if "accuracy" in args.parts:
@@ -222,6 +268,13 @@ def main():
                                                                             [125e-9, 250e-9, 500e-9, 1e-6])
         rows = lattice_error(args.device, distances, bases, args.k)
         print(f"wrote {write_csv('many_cells_lattice.csv', rows)}")
+    if "reuse" in args.parts:
+        rows = []
+        for path in args.runs:
+            new, old, pairs, frames = visited_points(path)
+            rows.append(dict(run=path, pairs=pairs, frames=frames, interpolated_points=new, nearest_points_before=old))
+            print_table([rows[-1]])
+        print(f"wrote {write_csv('many_cells_reuse.csv', rows)}")
     if "cost" in args.parts:
         counts, system_counts, end = ([1, 3], [3], 5e-4) if args.quick else ([1, 3, 8, 16, 64], [3], 2e-3)
         rows = cost(args.device, counts, system_counts, 25e-6, end)

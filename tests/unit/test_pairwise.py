@@ -7,7 +7,7 @@ import pytest
 import warpbem as wb
 from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion
 from warpbem.dynamics.model import Flow, Model, SolverOptions, build_solver
-from warpbem.dynamics.pairwise import lateral_spacing, lattice_corners, pair_key
+from warpbem.dynamics.pairwise import canonical, lateral_spacing, lattice_corners
 from warpbem.options import OptionError
 from warpbem.surfaces.body import Body
 from tests.interrupted import run_killed_after
@@ -64,18 +64,25 @@ def test_the_pair_lattice_grows_as_the_distance_to_the_five_halves_in_steps_of_2
     for distance in (10 * contact, 60 * contact, 1e-2):
         assert lateral_spacing(distance, 10e-9, contact) <= distance / 8
         assert lateral_spacing(distance, 10e-9, contact) > distance / 16
-    # the same lattice point seen from either cell, or mirrored, has one key
-    keys = {pair_key(np.array(point), 10e-9, (HEIGHT, HEIGHT), (0, 0))[0]
-            for point in ((5, 1), (-5, -1), (5, -1), (-5, 1))}
-    assert len(keys) == 1
+    # arrays alike
+    np.testing.assert_array_equal(lateral_spacing(np.array([1.5 * A, 4 * A]), 10e-9, np.full(2, contact)), [10e-9, 40e-9])
+    # the same lattice point seen from either cell, or mirrored, has one stored form
+    points, heights, meshes, swapped, mirrored = canonical([(5, 1), (-5, -1), (5, -1), (-5, 1)],
+                                                           [(1.0, 2.0)] * 4, [(0, 1)] * 4)
+    np.testing.assert_array_equal(points, [(5, 1)] * 4)
+    np.testing.assert_array_equal(swapped, [False, True, False, True])
+    np.testing.assert_array_equal(mirrored, [False, False, True, True])
+    np.testing.assert_array_equal(heights, [(1.0, 2.0), (2.0, 1.0), (1.0, 2.0), (2.0, 1.0)])
+    np.testing.assert_array_equal(meshes, [(0, 1), (1, 0), (0, 1), (1, 0)])
 
 
-def test_the_bilinear_weights_sum_to_one_and_leave_out_points_of_weight_zero():
-    corners = {tuple(p): w for w, p in lattice_corners((3.25e-6, -1.5e-6), 1e-6)}
-    assert corners == pytest.approx({(3, -2): 0.375, (3, -1): 0.375, (4, -2): 0.125, (4, -1): 0.125})
-    on_a_line = {tuple(p): w for w, p in lattice_corners((3.25e-6, 2e-6), 1e-6)}
-    assert on_a_line == pytest.approx({(3, 2): 0.75, (4, 2): 0.25})
-    assert len(lattice_corners((3e-6, 2e-6), 1e-6)) == 1  # on a lattice point: that point alone
+def test_the_bilinear_weights_sum_to_one_and_points_beyond_a_lattice_line_weigh_nothing():
+    points, weights = lattice_corners(np.array([(3.25e-6, -1.5e-6), (3.25e-6, 2e-6), (3e-6, 2e-6)]), np.full(3, 1e-6))
+    by_point = [{tuple(p): w for p, w in zip(ps, ws) if w > 0} for ps, ws in zip(points, weights)]
+    assert by_point[0] == pytest.approx({(3, -2): 0.375, (4, -2): 0.125, (3, -1): 0.375, (4, -1): 0.125})
+    assert by_point[1] == pytest.approx({(3, 2): 0.75, (4, 2): 0.25})  # on a lattice line in y
+    assert by_point[2] == {(3, 2): 1.0}  # on a lattice point (2e-6 / 1e-6 to round-off): that point alone
+    np.testing.assert_allclose(weights.sum(axis=1), 1.0, rtol=0, atol=1e-15)
 
 
 @pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
@@ -96,10 +103,15 @@ def test_between_lattice_points_the_pair_is_interpolated_to_second_order_in_the_
     errors = {}
     for base in (200e-9, 100e-9):  # lattices of 400 and 200 nm at this distance
         assert lateral_spacing(np.hypot(*offset), base, 2 * A) == 2 * base
-        errors[base] = max(relative_change(motion(*solves(2, **exact_heights, pair_lateral=base)._snapshot(bodies)),
-                                           direct))
+        pairs = solves(2, **exact_heights, pair_lateral=base)
+        interpolated = motion(*pairs._snapshot(bodies))
+        errors[base] = max(relative_change(interpolated, direct))
     nearest = [Body(MESH, position=bodies[0].position),
                Body(MESH, position=bodies[0].position + np.append(np.round(offset / 200e-9) * 200e-9, 11e-9))]
+    # the rows kept from one assembly to the next change no number: another lattice square (the
+    # nearest point, one of this square's corners), then this one again, bit for bit
+    pairs._snapshot(nearest)
+    assert all(np.array_equal(a, b) for a, b in zip(motion(*pairs._snapshot(bodies)), interpolated))
     snapped = max(relative_change(motion(Motion.of(hydro.mobility.solve(nearest)), hydro._grand_mobility(nearest)),
                                   direct))
     assert 3.0 < errors[200e-9] / errors[100e-9] < 5.0

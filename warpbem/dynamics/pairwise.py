@@ -73,54 +73,56 @@ PART_SHAPES = ((2, 3), (2, 3), (12, 2, 3), (12, 2, 3))
 PART_SIZES = tuple(int(np.prod(s)) for s in PART_SHAPES)
 # an offset this close to a lattice line, in lattice spacings, lies on it (lattice_corners)
 ROUND_OFF = 1e-9
+# the corners of a lattice square from its lower left one, in lattice spacings
+CORNER_STEPS = np.array([(0, 0), (1, 0), (0, 1), (1, 1)])
 
 
 class TooClose(Exception):
     """A snapped configuration is not a valid placement (a gap below the lattice spacing)."""
 
 
-def lateral_spacing(distance: float, base: float, contact: float) -> float:
-    """The pair lattice's spacing (m) at lateral ``distance`` (m): ``base`` times the largest
-    power of 2 not above (distance / contact)^(5/2) (LATTICE_POWER), nor above distance /
-    (8 base): the coupling's smooth change with the offset, which the interpolation assumes,
-    does not reach across a lattice as wide as the distance itself."""
-    if distance <= contact:
-        return base
-    level = min(LATTICE_POWER * math.log2(distance / contact), math.log2(distance / (WIDEST_SHARE * base)))
-    return base * 2.0 ** max(0, math.floor(level))
+def lateral_spacing(distance, base: float, contact):
+    """The pair lattice's spacing (m) at lateral ``distance`` (m; a number or an array, with
+    ``contact`` alike): ``base`` times the largest power of 2 not above (distance /
+    contact)^(5/2) (LATTICE_POWER), nor above distance / (8 base): the coupling's smooth change
+    with the offset, which the interpolation assumes, does not reach across a lattice as wide as
+    the distance itself. ``base`` at contact distance and below."""
+    distance, contact = np.asarray(distance, dtype=float), np.asarray(contact, dtype=float)
+    beyond = np.maximum(distance, contact)
+    level = np.minimum(LATTICE_POWER * np.log2(beyond / contact), np.log2(beyond / (WIDEST_SHARE * base)))
+    spacing = base * 2.0 ** np.maximum(0.0, np.floor(level))
+    return float(spacing) if spacing.ndim == 0 else spacing
 
 
-def lattice_corners(offset, spacing: float):
-    """[(weight, lattice point (2,) ints)] of the bilinear interpolation at the lateral
-    ``offset`` (m) on the square lattice of ``spacing`` (m): the four points of the lattice
-    square that holds it, those of weight 0 left out (an offset on a lattice line or point, to
-    ROUND_OFF of the spacing: cells placed on the lattice stay on it)."""
-    u = np.asarray(offset, dtype=float) / spacing
+def lattice_corners(offsets, spacings):
+    """(points (P, 4, 2) ints, weights (P, 4)) of the bilinear interpolation at each lateral
+    offset (m, (P, 2)) on the square lattice of its spacing (m, (P,)): the four points of the
+    lattice square that holds it. An offset on a lattice line or point, to ROUND_OFF of the
+    spacing (cells placed on the lattice stay on it), gives the points beyond it weight 0."""
+    u = np.asarray(offsets, dtype=float).reshape(-1, 2) / np.asarray(spacings, dtype=float).reshape(-1, 1)
     nearest = np.round(u)
     u = np.where(np.abs(u - nearest) < ROUND_OFF, nearest, u)
     base = np.floor(u)
     f = u - base
-    corners = []
-    for dx in (0, 1):
-        for dy in (0, 1):
-            weight = (f[0] if dx else 1.0 - f[0]) * (f[1] if dy else 1.0 - f[1])
-            if weight > 0.0:
-                corners.append((float(weight), base.astype(int) + (dx, dy)))
-    return corners
+    points = base.astype(int)[:, None, :] + CORNER_STEPS
+    weights = np.where(CORNER_STEPS == 1, f[:, None, :], 1.0 - f[:, None, :]).prod(axis=2)
+    return points, weights
 
 
-def pair_key(point, spacing: float, heights, meshes):
-    """(key, swapped, mirrored, canonical offset, canonical heights) of the pair whose second
-    cell is at the lattice ``point`` (ints, in units of ``spacing``) from its first: the cells
-    exchanged so that it points to x > 0 (or x = 0, y >= 0), mirrored so that y >= 0."""
-    point = np.array(point, dtype=int)
-    swapped = bool(point[0] < 0 or (point[0] == 0 and point[1] < 0))
-    if swapped:
-        point, heights, meshes = -point, heights[::-1], meshes[::-1]
-    mirrored = bool(point[1] < 0)
-    point[1] = abs(point[1])
-    key = ("pair",) + tuple(meshes) + tuple(heights) + (spacing,) + tuple(int(c) for c in point)
-    return key, swapped, mirrored, point * spacing, heights
+def canonical(points, heights, meshes):
+    """(points, heights, meshes, swapped, mirrored) of the pairs whose second cell is at the
+    lattice ``points`` ((K, 2) ints) from the first, at ``heights`` and of ``meshes`` ((K, 2)
+    each, first and second cell): their stored forms, the cells exchanged so that the point lies
+    at x > 0 (or x = 0, y >= 0), then mirrored so that y >= 0."""
+    points = np.asarray(points, dtype=int).reshape(-1, 2)
+    swapped = (points[:, 0] < 0) | ((points[:, 0] == 0) & (points[:, 1] < 0))
+    exchange = swapped[:, None]
+    points = np.where(exchange, -points, points)
+    heights = np.where(exchange, np.asarray(heights)[:, ::-1], heights)
+    meshes = np.where(exchange, np.asarray(meshes)[:, ::-1], meshes)
+    mirrored = points[:, 1] < 0
+    points[:, 1] = np.abs(points[:, 1])
+    return points, heights, meshes, swapped, mirrored
 
 
 def part_row(flow_velocity, flow_angular, basis_velocity, basis_angular, swapped: bool, mirrored: bool):
@@ -138,6 +140,17 @@ def part_row(flow_velocity, flow_angular, basis_velocity, basis_angular, swapped
     return np.concatenate([np.ravel(a) for a in (flow_velocity, flow_angular, basis_velocity, basis_angular)])
 
 
+def summed(cells, values, n: int) -> np.ndarray:
+    """(n, ...) the sum of ``values`` ((P, ...), one per pair) over the pairs, by the cell
+    ``cells[p]`` of each (np.bincount per component: np.add.at took 60 ms of a step of 64 cells,
+    a product with the incidence matrix 20 ms beside the BLAS threads of other runs)."""
+    flat = values.reshape(len(cells), int(np.prod(values.shape[1:])))
+    sums = np.zeros((n, flat.shape[1]))
+    for c in range(flat.shape[1]):
+        sums[:, c] = np.bincount(cells, weights=flat[:, c], minlength=n)
+    return sums.reshape((n,) + values.shape[1:])
+
+
 class PairwiseMobility:
     """Assembles the snapshot (flow Motion parts and grand-mobility parts) of ``hydro``'s model
     from its lone snapshots and pair snapshots (module docstring). ``hydro`` is the
@@ -150,6 +163,9 @@ class PairwiseMobility:
         self.cutoff = model.solver.pair_cutoff
         self.radii = model.outer_radii
         self._rows: dict = {}  # (pair key, swapped, mirrored) -> part_row of a kept pair snapshot
+        # of the last assembly: (pairs (2, P), each one's lattice square, spacing and heights (P, 5),
+        # which of its points' rows were looked up (P, 4), those rows (P, 4, row))
+        self._squares = None
 
     def assemble(self, bodies):
         """(flow velocity, angular velocity (n, 3); basis velocity, angular velocity (6n, n, 3),
@@ -179,20 +195,20 @@ class PairwiseMobility:
         offsets = positions[second, :2] - positions[first, :2]
         within = np.hypot(offsets[:, 0], offsets[:, 1]) <= self.cutoff
         first, second, offsets = first[within], second[within], offsets[within]
-        rows = np.array([self._pair_row(bodies, i, j, o) for i, j, o in zip(first, second, offsets)])
-        rows = rows.reshape(len(first), sum(PART_SIZES))
+        rows = self._pair_rows(bodies, first, second, offsets)
         flow_v, flow_w, grand_v, grand_w = (part.reshape((-1,) + shape) for part, shape in
                                             zip(np.split(rows, np.cumsum(PART_SIZES)[:-1], axis=1), PART_SHAPES))
-        velocity, angular = np.zeros((n, 3)), np.zeros((n, 3))
-        # (loaded cell, responding cell, load component, 3): the advanced indices side by side
+        count, cells = len(first), (first, second)
+        velocity = summed(first, flow_v[:, 0], n) + summed(second, flow_v[:, 1], n)
+        angular = summed(first, flow_w[:, 0], n) + summed(second, flow_w[:, 1], n)
+        # (loaded cell, responding cell, load component, 3); a pair's loads on one cell and the
+        # motion of the other land on its own entry, those on a cell and its own motion on the
+        # cell's diagonal entry, summed over its pairs
         by_cells_v, by_cells_w = np.zeros((n, n, 6, 3)), np.zeros((n, n, 6, 3))
-        cells = (first, second)
-        for a in (0, 1):
-            np.add.at(velocity, cells[a], flow_v[:, a])
-            np.add.at(angular, cells[a], flow_w[:, a])
-            for c in (0, 1):  # the loads on the pair's cell c, the motion of its cell a
-                np.add.at(by_cells_v, (cells[c], cells[a]), grand_v.reshape(-1, 2, 6, 2, 3)[:, c, :, a])
-                np.add.at(by_cells_w, (cells[c], cells[a]), grand_w.reshape(-1, 2, 6, 2, 3)[:, c, :, a])
+        for by_cells, grand in ((by_cells_v, grand_v), (by_cells_w, grand_w)):
+            g = grand.reshape(count, 2, 6, 2, 3)  # (pair, loaded cell, load component, responding cell, 3)
+            by_cells[first, second], by_cells[second, first] = g[:, 0, :, 1], g[:, 1, :, 0]
+            by_cells[np.arange(n), np.arange(n)] = summed(first, g[:, 0, :, 0], n) + summed(second, g[:, 1, :, 1], n)
         # each cell's lone snapshot at its pair height, once per pair it is in
         pairs_of = np.bincount(np.concatenate(cells), minlength=n)
         for b in np.flatnonzero(pairs_of):
@@ -204,31 +220,72 @@ class PairwiseMobility:
         basis_velocity, basis_angular = (a.transpose(0, 2, 1, 3).reshape(6 * n, n, 3) for a in (by_cells_v, by_cells_w))
         return velocity, angular, basis_velocity, basis_angular
 
-    def _pair_row(self, bodies, i, j, offset):
-        """The pair (i, j)'s snapshot at ``offset`` (m, of j from i along the wall) as one row
-        (part_row, in the order (i, j)): the bilinear interpolation of its lattice points'
-        snapshots, at the cells' heights on the pair lattice; solved as it is (not kept) when a
-        lattice point is too near for a valid placement."""
+    def _pair_rows(self, bodies, first, second, offsets) -> np.ndarray:
+        """(P, row) the snapshots of the pairs (first[p], second[p]) at ``offsets`` (m, of the
+        second cell from the first along the wall) as rows (part_row, in that order): the
+        bilinear interpolation of their lattice points' snapshots, at the cells' heights on the
+        pair lattice; a pair one of whose points is too near for a valid placement is solved as
+        it is (not kept). Arrays over the pairs: the points' rows are looked up again only for
+        the pairs whose lattice square, spacing or heights changed since the last assembly (or
+        that now need a point they did not), so a step of 64 cells, 2016 pairs, loops over few."""
         hydro = self.hydro
         d = hydro.interaction
-        heights = tuple(float(np.round(bodies[b].position[2] / d) * d) for b in (i, j))
-        meshes = (hydro.lone_of[i], hydro.lone_of[j])
-        spacing = lateral_spacing(float(np.hypot(*offset)), self.base, self.radii[i] + self.radii[j])
-        try:
-            return sum(weight * self._point_row(bodies, (i, j), pair_key(point, spacing, heights, meshes))
-                       for weight, point in lattice_corners(offset, spacing))
-        except TooClose:
+        heights = np.round(np.array([b.position[2] for b in bodies]) / d) * d
+        spacings = lateral_spacing(np.hypot(offsets[:, 0], offsets[:, 1]), self.base,
+                                   self.radii[first] + self.radii[second])
+        points, weights = lattice_corners(offsets, spacings)
+        square = np.column_stack([points[:, 0], spacings, heights[first], heights[second]])
+        pairs = np.stack([first, second])
+        kept = self._squares
+        if kept is None or not np.array_equal(kept[0], pairs):
+            kept = self._squares = (pairs, np.full_like(square, np.nan), np.zeros(weights.shape, bool),
+                                    np.zeros(weights.shape + (sum(PART_SIZES),)))
+        _, squares, filled, point_rows = kept
+        stale = np.any(square != squares, axis=1) | np.any((weights > 0) & ~filled, axis=1)
+        squares[stale], filled[stale], point_rows[stale] = square[stale], False, 0.0
+        too_close = self._look_up(bodies, first, second, points, weights, spacings, heights, stale)
+        rows = np.einsum("pc,pcr->pr", weights, point_rows)  # the points never looked up hold zeros and weigh 0
+        for p in too_close:
+            squares[p] = np.nan  # looked up again at the next assembly
+            i, j = first[p], second[p]
             flow, grand = hydro._solved([bodies[i], bodies[j]], self.radii[[i, j]])
-            return part_row(flow.velocity, flow.angular_velocity, grand.velocity, grand.angular_velocity, False, False)
+            rows[p] = part_row(flow.velocity, flow.angular_velocity, grand.velocity, grand.angular_velocity, False, False)
+        return rows
 
-    def _point_row(self, bodies, cells, keyed):
-        """The part_row of a lattice point's pair snapshot (``keyed``: pair_key's answer), solved
-        and kept if new."""
-        key, swapped, mirrored, offset, (h0, h1) = keyed
+    def _look_up(self, bodies, first, second, points, weights, spacings, heights, stale) -> set:
+        """Fill the kept rows (self._squares) of the ``stale`` pairs' lattice points of weight >
+        0; the pairs one of whose points is too near for a valid placement (not filled)."""
+        _, _, filled, point_rows = self._squares
+        meshes = np.array(self.hydro.lone_of)
+        pair_of, corner = np.nonzero(stale[:, None] & (weights > 0.0))
+        canonical_points, hs, ms, swapped, mirrored = canonical(
+            points[pair_of, corner], np.stack([heights[first], heights[second]], axis=1)[pair_of],
+            np.stack([meshes[first], meshes[second]], axis=1)[pair_of])
+        keys = zip(ms[:, 0].tolist(), ms[:, 1].tolist(), hs[:, 0].tolist(), hs[:, 1].tolist(),
+                   spacings[pair_of].tolist(), canonical_points[:, 0].tolist(), canonical_points[:, 1].tolist())
+        too_close = set()
+        for k, key in enumerate(keys):
+            p, c = int(pair_of[k]), int(corner[k])
+            if p in too_close:
+                continue
+            try:
+                point_rows[p, c] = self._point_row(bodies, (first[p], second[p]), ("pair",) + key, bool(swapped[k]),
+                                                   bool(mirrored[k]))
+                filled[p, c] = True
+            except TooClose:
+                too_close.add(p)
+        return too_close
+
+    def _point_row(self, bodies, cells, key, swapped: bool, mirrored: bool):
+        """The part_row, in the order of the model's ``cells``, of the pair snapshot ``key``
+        (("pair", meshes, heights, spacing, point): a lattice point's stored form, which
+        ``swapped`` and ``mirrored`` map back to the cells), solved and kept if new."""
         if (key, swapped, mirrored) in self._rows:
             return self._rows[key, swapped, mirrored]
         hydro = self.hydro
+        h0, h1, spacing, point = key[3], key[4], key[5], np.array(key[6:])
         order = cells[::-1] if swapped else cells
+        offset = point * spacing
         snapped = [Body(bodies[order[0]].mesh, position=(0.0, 0.0, h0)),
                    Body(bodies[order[1]].mesh, position=(offset[0], offset[1], h1))]
         radii = self.radii[list(order)]
