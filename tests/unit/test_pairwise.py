@@ -170,8 +170,13 @@ def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_pa
     from warpbem.app import run
 
     path = tmp_path / "pairs.toml"
-    path.write_text(PAIRS_SCENE.replace("count = [2, 1]", f"count = [{count[0]}, {count[1]}]")
-                    .replace("pitch = [10.0e-6, 0.0]", f"pitch = [{pitch[0]}, {pitch[1]}]"))
+    scene = PAIRS_SCENE.replace("count = [2, 1]", f"count = [{count[0]}, {count[1]}]")
+    if count != (2, 1):  # sixteen cells, each coupled to its nearest neighbours (the pairs 10 um apart) on
+        # coarser lattices (1 um at 10 um, heights to 100 nm): their pair snapshots in a minute
+        scene = scene.replace("pitch = [10.0e-6, 0.0]", f"pitch = [{pitch[0]}, {pitch[1]}]").replace(
+            'grand_mobility = "pairs"',
+            'grand_mobility = "pairs"\npair_lateral = 1.0e-6\npair_cutoff = 1.2e-5\nreuse_interaction = 1.0e-7')
+    path.write_text(scene)
     run.run(path, tmp_path / "straight.h5", progress=lambda line: None)
     run.run(path, tmp_path / "again.h5", progress=lambda line: None)
     run_killed_after(2, path, tmp_path / "killed.h5")
@@ -182,7 +187,8 @@ def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_pa
             h5py.File(tmp_path / "again.h5") as h:
         assert f["time"].shape == g["time"].shape == (5,)
         assert g["position"].shape[1] == count[0] * count[1]
-        assert np.all(g["bond_count"][-1] > 0)  # every cell bound: each one's kinetics is compared
+        bound = g["bond_count"][:].max(axis=0) > 0
+        assert bound.sum() >= 0.75 * bound.size  # most cells bind: their kinetics are compared
         for name in ("position", "velocity", "bond_receptor", "bond_count"):
             np.testing.assert_array_equal(h[name][:], g[name][:])
         np.testing.assert_array_equal(f["bond_receptor"][:], g["bond_receptor"][:])
