@@ -39,6 +39,7 @@ from common import arguments, output as output_path, print_table, pyplot, save_c
 from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion
 from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy, build_solver
 from warpbem.dynamics.pairwise import lateral_spacing
+from warpbem.hydro.options import DEFAULT_PAIR_CUTOFF
 from warpbem.dynamics.simulator import Simulator
 from warpbem.forces.adhesion import Adhesion
 from warpbem.forces.bond_model import BondOptions
@@ -165,6 +166,8 @@ def visited_points(path, interaction=20e-9):
     radii = np.full(positions.shape[1], A)
     interpolated, nearest = set(), set()
     first, second = np.triu_indices(positions.shape[1], 1)
+    within = np.hypot(*(positions[0, second, :2] - positions[0, first, :2]).T) <= DEFAULT_PAIR_CUTOFF
+    first, second = first[within], second[within]  # the pairs within the cut-off at the start
     contact = radii[first] + radii[second]
 
     def stored(points, spacings, heights):
