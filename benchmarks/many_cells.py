@@ -254,7 +254,8 @@ def cost_chart(rows, path):
 
 def main():
     parser = arguments(__doc__)
-    parser.add_argument("--parts", nargs="+", default=["accuracy"], choices=["accuracy", "cutoff", "lattice", "reuse", "cost"])
+    parser.add_argument("--parts", nargs="+", default=["accuracy"],
+                        choices=["accuracy", "cutoff", "lattice", "reuse", "cost"])
     parser.add_argument("--runs", nargs="*", default=[], help="run files for --parts reuse")
     parser.add_argument("--k", type=int, default=2, help="sphere mesh subdivisions")
     args = parser.parse_args()

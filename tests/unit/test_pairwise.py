@@ -65,7 +65,8 @@ def test_the_pair_lattice_grows_as_the_distance_to_the_five_halves_in_steps_of_2
         assert lateral_spacing(distance, 10e-9, contact) <= distance / 8
         assert lateral_spacing(distance, 10e-9, contact) > distance / 16
     # arrays alike
-    np.testing.assert_array_equal(lateral_spacing(np.array([1.5 * A, 4 * A]), 10e-9, np.full(2, contact)), [10e-9, 40e-9])
+    spacings = lateral_spacing(np.array([1.5 * A, 4 * A]), 10e-9, np.full(2, contact))
+    np.testing.assert_array_equal(spacings, [10e-9, 40e-9])
     # the same lattice point seen from either cell, or mirrored, has one stored form
     points, heights, meshes, swapped, mirrored = canonical([(5, 1), (-5, -1), (5, -1), (-5, 1)],
                                                            [(1.0, 2.0)] * 4, [(0, 1)] * 4)
@@ -95,8 +96,8 @@ def test_between_lattice_points_the_pair_is_interpolated_to_second_order_in_the_
     spacing must cut the error 4 times (3-5 allowed for the O(s^3) rest); the lattice points are
     exchanged and mirrored ones (x < 0, then y < 0), so their signs are checked too."""
     offset = np.array([-6133.333333e-9, 1333.333333e-9])
-    bodies = [Body(MESH, position=(0.3e-6, 0.2e-6, HEIGHT)), Body(MESH, position=(0.3e-6 + offset[0], 0.2e-6 + offset[1],
-                                                                                 HEIGHT + 11e-9))]
+    second = (0.3e-6 + offset[0], 0.2e-6 + offset[1], HEIGHT + 11e-9)
+    bodies = [Body(MESH, position=(0.3e-6, 0.2e-6, HEIGHT)), Body(MESH, position=second)]
     exact_heights = dict(reuse_tolerance=1e-12, reuse_interaction=1e-12, grand_mobility="pairs")
     hydro = solves(2, **exact_heights, pair_lateral=1e-12)
     direct = motion(Motion.of(hydro.mobility.solve(bodies)), hydro._grand_mobility(bodies))

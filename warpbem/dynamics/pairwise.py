@@ -48,8 +48,6 @@ wide.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..surfaces.body import Body
@@ -249,7 +247,8 @@ class PairwiseMobility:
             squares[p] = np.nan  # looked up again at the next assembly
             i, j = first[p], second[p]
             flow, grand = hydro._solved([bodies[i], bodies[j]], self.radii[[i, j]])
-            rows[p] = part_row(flow.velocity, flow.angular_velocity, grand.velocity, grand.angular_velocity, False, False)
+            rows[p] = part_row(flow.velocity, flow.angular_velocity, grand.velocity, grand.angular_velocity,
+                               False, False)
         return rows
 
     def _look_up(self, bodies, first, second, points, weights, spacings, heights, stale) -> set:
