@@ -29,6 +29,7 @@ Writes results/bench/many_cells_*.csv and many_cells.png.
 """
 
 import json
+import resource
 import time
 import warnings
 
@@ -208,7 +209,7 @@ def cost(device, counts, system_counts, spacing, end):
     """Wall time of n rolling cells over ``end`` s, pairs (and the whole system's snapshots for
     ``system_counts``) side by side: the median step that solved no new snapshot (the cost that
     must grow linearly), the snapshots solved and the time they took (the steps' excess over that
-    median), and the memory of the kept snapshots."""
+    median), the memory of the kept snapshots and the process's peak resident memory so far."""
     rows = []
     for mode, ns in (("pairs", counts), ("system", system_counts)):
         for n in ns:
@@ -228,7 +229,9 @@ def cost(device, counts, system_counts, spacing, end):
                              snapshot_s=float(np.sum(walls[solved > 0] - plain)) / max(int(solved.sum()), 1),
                              bonds=int(frame.parts["bond"]["count"].sum()),
                              kept_mb=sum(a.nbytes for f, g in kept for a in (f.velocity, f.angular_velocity,
-                                                                             g.velocity, g.angular_velocity)) / 1e6))
+                                                                             g.velocity, g.angular_velocity)) / 1e6,
+                             # the process's peak so far: the runs go from few cells to many
+                             peak_rss_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e3))
             print_table([rows[-1]])
     return rows
 
