@@ -2,7 +2,7 @@
 J. 81:799), e.g.
 
     warpbem sweep scenes/rolling_pair.toml --output-dir results/rolling_pair --workers 2
-    python scenes/rolling_pair.py results/rolling_pair
+    python scenes/rolling_pair.py results/rolling_pair [more sweep folders, e.g. other seeds]
 
 writes results/rolling_pair.csv (per run and cell: arrangement, spacing, velocity, pauses,
 lateral drift, bonds) and docs/figures/rolling_pair.png (mean rolling velocity, mean pause
@@ -55,9 +55,9 @@ def arrangement(offset) -> tuple[str, float]:
     return ("inline" if abs(offset[0]) >= abs(offset[1]) else "side"), spacing
 
 
-def table(folder: Path) -> list[dict]:
+def table(folders: list[Path]) -> list[dict]:
     rows = []
-    for path in sorted(folder.glob("point*.h5")):
+    for path in sorted(path for folder in folders for path in folder.glob("point*.h5")):
         with open_result(path) as f:
             t, position, u = f["time"][:], f["position"][:], f["velocity"][:, :, 0]
             bonds, seed = f["bond_count"][:], int(f.attrs["seed"])
@@ -69,7 +69,7 @@ def table(folder: Path) -> list[dict]:
             part = slice(bound[0], None)
             ts, x, y = t[part], position[part, cell, 0], position[part, cell, 1]
             mean_pause, paused, count = pauses(ts, x, u[0, cell])
-            rows.append(dict(run=path.stem, arrangement=kind, spacing_um=spacing * 1e6, seed=seed, cell=cell,
+            rows.append(dict(run=f"{path.parent.name}/{path.stem}", arrangement=kind, spacing_um=spacing * 1e6, seed=seed, cell=cell,
                              free_um_s=u[0, cell] * 1e6, first_bond_ms=ts[0] * 1e3, end_ms=t[-1] * 1e3,
                              velocity_um_s=(x[-1] - x[0]) / (ts[-1] - ts[0]) * 1e6,
                              mean_pause_ms=mean_pause * 1e3, paused_fraction=paused, pauses=count,
@@ -109,10 +109,10 @@ def chart(rows: list[dict], out: Path) -> Path:
 
 
 def main():
-    folder = Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "results" / "rolling_pair"
-    rows = table(folder)
+    folders = [Path(name) for name in sys.argv[1:]] or [ROOT / "results" / "rolling_pair"]
+    rows = table(folders)
     if not rows:
-        print(f"{folder}: no runs (see this script's docstring)")
+        print(f"{', '.join(map(str, folders))}: no runs (see this script's docstring)")
         return
     write(rows, "rolling_pair.csv")
     print("chart:", chart(rows, ROOT / "docs" / "figures" / "rolling_pair.png"))
