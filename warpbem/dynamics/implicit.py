@@ -32,6 +32,7 @@ import scipy.sparse
 
 MAX_ITERATIONS = 200
 LENGTH_TOLERANCE = 1e-16  # m: converged when no coordinate moves by more (plus 1e-13 relative)
+STALLED = 0.25  # a Newton step's squared norm above this share of the step before it: not shrinking
 
 
 class ImplicitSolveError(RuntimeError):
@@ -155,15 +156,21 @@ class ImplicitSystem:
                 break
         else:
             raise ImplicitSolveError("no admissible start: every candidate makes a force law diverge")
+        previous = np.inf
         for _ in range(MAX_ITERATIONS):
             gradient = self.quadratic @ z - self.rate_response.transposed(force)
             step = -np.linalg.lstsq(self.hessian(stiffness, dt), gradient, rcond=1e-14)[0]
             moves = dt * np.abs(self.rate_response @ step)
             # converged when the step moves no coordinate and changes the motion it causes by
             # no more than round-off (in the dissipation norm z.Q.z: a rolling cell can turn
-            # about its bonds without stretching them, so coordinates alone do not tell)
+            # about its bonds without stretching them, so coordinates alone do not tell), or by
+            # no less than the step before it: Newton's steps shrink quadratically, so a step
+            # that stops shrinking is the system's round-off floor (with numpy 2.4.6 and scipy
+            # 1.17.1 a random 18-coefficient test system's floor was 1.5e-12 of z, its step's
+            # norm 3.1e-39 repeated for 190 iterations)
+            size = step @ self.quadratic @ step
             if (np.all(moves <= LENGTH_TOLERANCE + 1e-13 * np.abs(self.end_values(z, dt)))
-                    and step @ self.quadratic @ step <= 1e-24 * max(z @ self.quadratic @ z, 1e-300)):
+                    and (size <= 1e-24 * max(z @ self.quadratic @ z, 1e-300) or size >= STALLED * previous)):
                 z = z + step
                 return z, self.evaluate(self.end_values(z, dt))[1]
             slope = gradient @ step
@@ -177,6 +184,6 @@ class ImplicitSystem:
                 t *= 0.5
                 if t < 1e-12:  # no decrease of phi or its gradient along this direction: converged
                     return z, force
-            z, phi, force, stiffness = trial, phi_trial, force_trial, stiffness_trial
+            z, phi, force, stiffness, previous = trial, phi_trial, force_trial, stiffness_trial, size
         raise ImplicitSolveError(f"the joint backward-Euler solve did not converge in {MAX_ITERATIONS} Newton"
                                  f" steps (last coordinate change {moves.max():.3g} m)")
