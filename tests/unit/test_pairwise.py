@@ -96,7 +96,7 @@ def test_between_lattice_points_the_pair_is_interpolated_to_second_order_in_the_
     spacing must cut the error 4 times (3-5 allowed for the O(s^3) rest); the lattice points are
     exchanged and mirrored ones (x < 0, then y < 0), so their signs are checked too."""
     offset = np.array([-6133.333333e-9, 1333.333333e-9])
-    second = (0.3e-6 + offset[0], 0.2e-6 + offset[1], HEIGHT + 11e-9)
+    second = (0.3e-6 + offset[0], 0.2e-6 + offset[1], HEIGHT)  # one height: 7 solves a point (half turn)
     bodies = [Body(MESH, position=(0.3e-6, 0.2e-6, HEIGHT)), Body(MESH, position=second)]
     exact_heights = dict(reuse_tolerance=1e-12, reuse_interaction=1e-12, grand_mobility="pairs")
     hydro = solves(2, **exact_heights, pair_lateral=1e-12)
@@ -108,7 +108,7 @@ def test_between_lattice_points_the_pair_is_interpolated_to_second_order_in_the_
         interpolated = motion(*pairs._snapshot(bodies))
         errors[base] = max(relative_change(interpolated, direct))
     nearest = [Body(MESH, position=bodies[0].position),
-               Body(MESH, position=bodies[0].position + np.append(np.round(offset / 200e-9) * 200e-9, 11e-9))]
+               Body(MESH, position=bodies[0].position + np.append(np.round(offset / 200e-9) * 200e-9, 0.0))]
     # the rows kept from one assembly to the next change no number: another lattice square (the
     # nearest point, one of this square's corners), then this one again, bit for bit
     pairs._snapshot(nearest)
@@ -162,36 +162,38 @@ mesh = { shape = "sphere", radius = 2.0e-6, subdivisions = 2 }
 @pytest.mark.parametrize("count, pitch", [((2, 1), (10e-6, 0.0)), ((4, 4), (10e-6, 10e-6))],
                          ids=["two cells", "a 4 x 4 patch"])
 def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_path, count, pitch):
-    """Adhesive cells on pair snapshots (two, and sixteen in a patch): a second run with the
-    same seed repeats the first bit for bit (the pairs' part is a function of the state alone:
-    the lattice points' snapshots and their weights, so which snapshots a run happens to keep
-    changes no number), and a run killed after 2 frames and resumed forms the same bonds and ends
-    within 1e-9 radii of where the uninterrupted one ends (as one cell's, test_adhesion.py: its
-    solves start GMRES from another previous solution)."""
+    """Adhesive cells on pair snapshots (two, and sixteen in a patch): a run killed after 2
+    frames and resumed forms the same bonds and ends within 1e-9 radii of where the
+    uninterrupted one ends (as one cell's, test_adhesion.py: its solves start GMRES from another
+    previous solution); for two cells a second run with the same seed also repeats the first bit
+    for bit (the pairs' part is a function of the state alone: the lattice points' snapshots and
+    their weights, so which snapshots a run happens to keep changes no number)."""
     from warpbem.app import run
 
     path = tmp_path / "pairs.toml"
     scene = PAIRS_SCENE.replace("count = [2, 1]", f"count = [{count[0]}, {count[1]}]")
     if count != (2, 1):  # sixteen cells, each coupled to its nearest neighbours (the pairs 10 um apart) on
-        # coarser lattices (1 um at 10 um, heights to 100 nm): their pair snapshots in a minute
+        # coarser lattices (2 um at 10 um, heights to 200 nm): few pair snapshots
         scene = scene.replace("pitch = [10.0e-6, 0.0]", f"pitch = [{pitch[0]}, {pitch[1]}]").replace(
             'grand_mobility = "pairs"',
-            'grand_mobility = "pairs"\npair_lateral = 1.0e-6\npair_cutoff = 1.2e-5\nreuse_interaction = 1.0e-7')
+            'grand_mobility = "pairs"\npair_lateral = 2.0e-6\npair_cutoff = 1.2e-5\nreuse_interaction = 2.0e-7')
     path.write_text(scene)
     run.run(path, tmp_path / "straight.h5", progress=lambda line: None)
-    run.run(path, tmp_path / "again.h5", progress=lambda line: None)
+    if count == (2, 1):  # the same seed's rerun on two cells (the kept rows are tested bit for bit above)
+        run.run(path, tmp_path / "again.h5", progress=lambda line: None)
     run_killed_after(2, path, tmp_path / "killed.h5")
     run.run(None, tmp_path / "killed.h5", resume=True, progress=lambda line: None)
     import h5py
 
-    with h5py.File(tmp_path / "killed.h5") as f, h5py.File(tmp_path / "straight.h5") as g, \
-            h5py.File(tmp_path / "again.h5") as h:
+    with h5py.File(tmp_path / "killed.h5") as f, h5py.File(tmp_path / "straight.h5") as g:
         assert f["time"].shape == g["time"].shape == (5,)
         assert g["position"].shape[1] == count[0] * count[1]
         bound = g["bond_count"][:].max(axis=0) > 0
         assert bound.sum() >= 0.75 * bound.size  # most cells bind: their kinetics are compared
-        for name in ("position", "velocity", "bond_receptor", "bond_count"):
-            np.testing.assert_array_equal(h[name][:], g[name][:])
+        if count == (2, 1):
+            with h5py.File(tmp_path / "again.h5") as h:
+                for name in ("position", "velocity", "bond_receptor", "bond_count"):
+                    np.testing.assert_array_equal(h[name][:], g[name][:])
         np.testing.assert_array_equal(f["bond_receptor"][:], g["bond_receptor"][:])
         # the resumed solves start GMRES from another previous solution (round-off apart)
         np.testing.assert_allclose(f["position"][:], g["position"][:], rtol=0, atol=1e-9 * A)
