@@ -24,6 +24,10 @@
    snapshots solved; the fitted exponent of the cost per step over n.
 
     python benchmarks/many_cells.py [--parts accuracy cutoff lattice reuse cost] [--runs RUN.h5 ...] [--quick]
+        [--cells N ...] [--system-cells N ...] [--device cuda:0]
+
+On a GPU, benchmarks/device_many_cells.sh measures the 8 x 8 patch's step on CUDA and on that
+machine's CPU side by side (part 2).
 
 Writes results/bench/many_cells_*.csv and many_cells.png.
 """
@@ -261,6 +265,10 @@ def main():
                         choices=["accuracy", "cutoff", "lattice", "reuse", "cost"])
     parser.add_argument("--runs", nargs="*", default=[], help="run files for --parts reuse")
     parser.add_argument("--k", type=int, default=2, help="sphere mesh subdivisions")
+    parser.add_argument("--cells", nargs="*", type=int, default=[],
+                        help="the cell counts of --parts cost (default 1 3 8 16 64; 1 3 with --quick)")
+    parser.add_argument("--system-cells", nargs="*", type=int, default=None,
+                        help="the counts of --parts cost solved as whole systems too (default 3)")
     args = parser.parse_args()
     if "accuracy" in args.parts:
         cases = ([("line", 3, 25e-6)] if args.quick else
@@ -284,9 +292,13 @@ def main():
         print(f"wrote {write_csv('many_cells_reuse.csv', rows)}")
     if "cost" in args.parts:
         counts, system_counts, end = ([1, 3], [3], 5e-4) if args.quick else ([1, 3, 8, 16, 64], [3], 2e-3)
+        counts = args.cells or counts
+        system_counts = system_counts if args.system_cells is None else args.system_cells
         rows = cost(args.device, counts, system_counts, 25e-6, end)
-        slope, _ = exponent([r for r in rows if r["mode"] == "pairs" and r["cells"] > 1], "step_s")
-        print(f"pairs: a step without new snapshots costs n^{slope:.2f} from 3 cells")
+        several = [r for r in rows if r["mode"] == "pairs" and r["cells"] > 1]
+        if len(several) > 1:
+            slope, _ = exponent(several, "step_s")
+            print(f"pairs: a step without new snapshots costs n^{slope:.2f} from {several[0]['cells']} cells")
         print(f"wrote {write_csv('many_cells_cost.csv', rows)}, {cost_chart(rows, output_path('many_cells.png'))}")
 
 
