@@ -19,11 +19,15 @@
    distance^4 lattice from 10 nm that the pairs snapped to before, heights on the pair height
    lattice in both. Counted at the frames only (the steps between them visit more points, the
    finer lattice more of them), so both counts are lower bounds;
+1e. factors: pair snapshots of two cells at a run of lateral offsets 15-17.5 um (no contact
+   refinement between them), with the solver's store of block factors (``hydro/block_factors.py``:
+   each cell's LU taken from the store when its shape and height were seen) and without, the two
+   interleaved; wall time per snapshot and the store's hits;
 2. cost per step: n cells rolling on stiff bonds (the state diagram's rolling point) for a
    short run from the same start, pairs against the whole system's snapshots, wall time and
    snapshots solved; the fitted exponent of the cost per step over n.
 
-    python benchmarks/many_cells.py [--parts accuracy cutoff lattice reuse cost] [--runs RUN.h5 ...] [--quick]
+    python benchmarks/many_cells.py [--parts accuracy cutoff lattice reuse factors cost] [--runs RUN.h5 ...] [--quick]
         [--cells N ...] [--system-cells N ...] [--device cuda:0]
 
 On a GPU, benchmarks/device_many_cells.sh measures the 8 x 8 patch's step on CUDA and on that
@@ -195,6 +199,27 @@ def visited_points(path, interaction=20e-9):
     return len(interpolated), len(nearest), len(first), len(positions)
 
 
+def factor_store(device, k, count):
+    """Wall time of ``count`` pair snapshots (13 solves each, the pairs' own) with the store of block
+    factors and without it, interleaved offset by offset."""
+    mesh = wb.mesh.sphere(A, k)
+    kept, plain = (solves(mesh, 2, device, reuse_tolerance=2e-9, grand_mobility="pairs") for _ in range(2))
+    plain.mobility._factors = None
+    walls = {"store": [], "no store": []}
+    for i in range(count):
+        bodies = [Body(mesh, position=(0.0, 0.0, REST)), Body(mesh, position=(15e-6 + 0.5e-6 * i, 0.0, REST + 20e-9))]
+        for name, hydro in (("store", kept), ("no store", plain)):
+            t = time.perf_counter()
+            hydro._solved(bodies)
+            walls[name].append(time.perf_counter() - t)
+    store = kept.mobility._factors
+    rows = [dict(k=k, snapshots=count, store=name, mean_s=float(np.mean(w)), first_s=w[0], later_mean_s=float(np.mean(w[1:])),
+                 hits=store.hits if name == "store" else 0) for name, w in walls.items()]
+    print_table(rows)
+    print(f"later snapshots: the store takes {rows[0]['later_mean_s'] / rows[1]['later_mean_s']:.2f} of the time")
+    return rows
+
+
 def rolling_patch(n, spacing, mode, k=3, seed=1):
     """(model, state) of n rigid cells rolling on stiff bonds, released at the rest height in a
     line (n <= 3) or a square patch, with ``mode`` "system" or "pairs" snapshots."""
@@ -262,7 +287,7 @@ def cost_chart(rows, path):
 def main():
     parser = arguments(__doc__)
     parser.add_argument("--parts", nargs="+", default=["accuracy"],
-                        choices=["accuracy", "cutoff", "lattice", "reuse", "cost"])
+                        choices=["accuracy", "cutoff", "lattice", "reuse", "factors", "cost"])
     parser.add_argument("--runs", nargs="*", default=[], help="run files for --parts reuse")
     parser.add_argument("--k", type=int, default=2, help="sphere mesh subdivisions")
     parser.add_argument("--cells", nargs="*", type=int, default=[],
@@ -290,6 +315,9 @@ def main():
             rows.append(dict(run=path, pairs=pairs, frames=frames, interpolated_points=new, nearest_points_before=old))
             print_table([rows[-1]])
         print(f"wrote {write_csv('many_cells_reuse.csv', rows)}")
+    if "factors" in args.parts:
+        rows = factor_store(args.device, 2 if args.quick else 3, 3 if args.quick else 6)
+        print(f"wrote {write_csv('many_cells_factors.csv', rows)}")
     if "cost" in args.parts:
         counts, system_counts, end = ([1, 3], [3], 5e-4) if args.quick else ([1, 3, 8, 16, 64], [3], 2e-3)
         counts = args.cells or counts

@@ -223,7 +223,9 @@ def test_block_jacobi_preconditioner_matches_plain_gmres_and_is_kept_for_fixed_b
     """The box-shaped adherent cell (scenes/adherent_box.q9, flat base 0.25 um above the wall,
     not refined) made plain GMRES crawl (956 iterations to 1e-8 with two boxes, fig. 5.12): with the
     exact inverse of each body's own block it needs a few tens, gives the same motion, and the
-    fixed cell's LU factors are computed once and kept while only the free cell moves."""
+    fixed cell's LU factors are computed once and kept while only the free cell moves; the free
+    cell's are taken from the solver's store while it moves along the wall (the same block,
+    hydro/block_factors.py) and computed anew at another height."""
     from pathlib import Path
 
     box = wb.mesh.load(Path(__file__).resolve().parents[2] / "scenes" / "adherent_box.q9")
@@ -243,8 +245,10 @@ def test_block_jacobi_preconditioner_matches_plain_gmres_and_is_kept_for_fixed_b
         system = solver._last[0]
         if factors is not None:
             assert system.factors[1] is factors  # the fixed cell's LU, kept
-            assert system.factors[0] is not first_free  # the free cell's, redone
+            assert system.factors[0] is first_free  # the free cell's, from the store
         factors, first_free = system.factors[1], system.factors[0]
+    solver.solve([wb.Body(free, position=(-19e-6, 3.5e-6, 11.5e-6)), adherent])
+    assert solver._last[0].factors[1] is factors and solver._last[0].factors[0] is not first_free
 
 
 @pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")  # unrefined on purpose: a short test

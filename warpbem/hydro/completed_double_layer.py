@@ -47,6 +47,7 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse.linalg as spla
 
+from .block_factors import BlockFactors, block_key
 from .deflated import RigidModes, deflated_operator
 from .geometry import SurfaceGeometry
 from .operators import DiscreteOperator, dof_indices
@@ -248,7 +249,7 @@ class CompletedDoubleLayer:
         return matrix
 
     def preconditioner(self, previous: "CompletedDoubleLayer | None", kept_for_later: bool = True,
-                       every_body: bool = False) -> spla.LinearOperator:
+                       every_body: bool = False, factors: BlockFactors | None = None) -> spla.LinearOperator:
         """Block Jacobi: the exact inverse of each body's own block (LU), kept for bodies that
         did not change since ``previous``. It takes the ill-conditioning of a body near the wall
         (its own image) out of GMRES: the box-shaped adherent cell's unrefined flat base 0.25 um
@@ -263,7 +264,9 @@ class CompletedDoubleLayer:
         diagonal_blocks), so large scenes keep the preconditioner. ``every_body``: factor every
         body's block whatever its size, for a system solved for many loads (a pair snapshot's 13
         solves: a refined 5 um cell's block of 3663 unknowns factors in about 1 s, and cuts GMRES
-        from about 30 iterations per solve; dynamics/pairwise.py)."""
+        from about 30 iterations per solve; dynamics/pairwise.py). ``factors``: a solver's store
+        of free bodies' factors by shape and height (``block_factors.py``), which a moved body
+        of a block already seen takes instead of factoring anew."""
         if self.factors is not None:  # built for this system already
             return self._block_jacobi
         old = previous.factors if previous is not None and previous.factors is not None else []
@@ -272,10 +275,15 @@ class CompletedDoubleLayer:
         needed = [p for p, rows in enumerate(self.ranges)
                   if not kept[p] and (every_body or (self.fixed[p] and kept_for_later)
                                       or rows.stop - rows.start <= FACTOR_LIMIT)]
-        blocks = self.double_layer.diagonal_blocks(needed)
-        self.factors = [old[p] if kept[p] else
+        keys = {p: self._block_key(p) for p in needed if factors is not None and not self.fixed[p]}
+        stored = {p: found for p, key in keys.items() if (found := factors.get(key)) is not None}
+        blocks = self.double_layer.diagonal_blocks([p for p in needed if p not in stored])
+        self.factors = [old[p] if kept[p] else stored[p] if p in stored else
                         scipy.linalg.lu_factor(self.body_block(p, blocks[p]), check_finite=False) if p in blocks else None
                         for p in range(len(self.ranges))]
+        for p, key in keys.items():
+            if p not in stored:
+                factors.put(key, self.factors[p])
 
         ranges, factors = self.ranges, self.factors  # not self: a cycle through the closure kept
         # whole systems (dense matrices) alive until the cyclic collector ran, 3 GB per step
@@ -289,6 +297,13 @@ class CompletedDoubleLayer:
 
         self._block_jacobi = spla.LinearOperator((self.size, self.size), matvec=apply, dtype=np.float64)
         return self._block_jacobi
+
+    def _block_key(self, body: int) -> bytes:
+        """The store key of a free body's own block (block_factors.block_key)."""
+        geometry = self.geometry
+        first, last = geometry.element_ranges[body]
+        return block_key(geometry.element_nodes[first:last], geometry.centres[body], geometry.density_order,
+                         geometry.length_scale)
 
     def preconditioner_is_exact(self) -> bool:
         """One body with its block factored: block Jacobi is then the inverse of the system."""

@@ -19,6 +19,7 @@ import numpy as np
 from ..surfaces.body import Body
 from ..surfaces.placement import check_placement
 from ..surfaces.gaps import WALL
+from .block_factors import BlockFactors
 from .completed_double_layer import FORCE_UNIT, TORQUE_UNIT, CompletedDoubleLayer, all_completion_poles
 from .deflated import deflated_solve
 from .geometry import SurfaceGeometry
@@ -111,6 +112,7 @@ class MobilitySolver:
         if self._mode is None and unknowns is not None:
             self._mode = choose_mode(int(unknowns), self.options.dtype, self.device)
         self._kept = KeptBlocks() if self.keep_systems else None
+        self._factors = BlockFactors() if self.keep_systems else None
         self._last = None  # (CompletedDoubleLayer, solution vector, speed, bodies key) of the previous solve
         self._warned = set()  # contacts already reported by this solver
 
@@ -202,7 +204,7 @@ class MobilitySolver:
         if initial_guess is None and previous is not None and background:
             # the previous solution is in the previous scaling: rescale the loads part with it
             initial_guess = system.initial_guess(previous, self._last[1] * (self._last[2] / speed))
-        preconditioner = (system.preconditioner(previous, self.keep_systems, factor_every_body)
+        preconditioner = (system.preconditioner(previous, self.keep_systems, factor_every_body, self._factors)
                           if options.precondition else None)
         result = deflated_solve(system.linear_operator(), rhs, options, initial_guess=initial_guess,
                                 preconditioner=preconditioner, exact_preconditioner=system.preconditioner_is_exact())
@@ -241,6 +243,7 @@ class MobilitySolver:
         other = copy.copy(self)
         other._mode = None if self.options.operator == "auto" else self.options.operator
         other._kept = KeptBlocks() if self.keep_systems else None
+        other._factors = BlockFactors() if self.keep_systems else None
         other._last, other._warned = None, set()
         return other
 
