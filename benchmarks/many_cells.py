@@ -7,6 +7,10 @@
    cells' own positions ("pairwise": the approximation alone) and on the default lattices
    ("pairs, lattices"), and the cells alone (no coupling, for scale); cells in a line along the
    flow and in square patches;
+1a. resistance: the pairs' mobilities summed (the pairs' rule, at the cells' own positions) and
+   the pairs' resistances summed and inverted (pairwise-additive resistance, Stokesian dynamics'
+   rule for lubrication), both from direct solves of each cell alone and each pair alone,
+   against the whole system's solve, on the accuracy part's cases;
 1b. cut-off: the error of leaving out pairs beyond 50-150 um on an 8 x 8 patch 25 um apart,
    against every pair;
 1c. lattice: two cells (where the pairs are exact) at 12.5-40 um along a line 30 degrees off the
@@ -27,7 +31,7 @@
    short run from the same start, pairs against the whole system's snapshots, wall time and
    snapshots solved; the fitted exponent of the cost per step over n.
 
-    python benchmarks/many_cells.py [--parts accuracy cutoff lattice reuse factors cost] [--runs RUN.h5 ...] [--quick]
+    python benchmarks/many_cells.py [--parts accuracy resistance cutoff lattice reuse factors cost] [--runs RUN.h5 ...] [--quick]
         [--cells N ...] [--system-cells N ...] [--device cuda:0]
 
 On a GPU, benchmarks/device_many_cells.sh measures the 8 x 8 patch's step on CUDA and on that
@@ -112,6 +116,58 @@ def accuracy(device, cases, k):
         row["alone_grand"], row["alone_flow"] = change(motion(*alone._snapshot(bodies)), exact)
         rows.append(row)
         print_table([row])
+    return rows
+
+
+def embedded(hydro, bodies, cells, n):
+    """(Q (6n, 6n), flow motion (6n,)) of the ``cells`` among n solved alone, in the n cells'
+    layout: Q by loads on each cell in turn, the motion as ``motion`` gives it."""
+    q, u = motion(Motion.of(hydro.mobility.solve([bodies[c] for c in cells])),
+                  hydro._grand_mobility([bodies[c] for c in cells]))
+    m, rows = len(cells), np.concatenate([np.arange(6 * c, 6 * c + 6) for c in cells])
+    big_q, big_u = np.zeros((6 * n, 6 * n)), np.zeros(6 * n)
+    big_q[np.ix_(rows, rows)] = q
+    for s, c in enumerate(cells):
+        big_u[3 * c:3 * c + 3], big_u[3 * n + 3 * c:3 * n + 3 * c + 3] = u[3 * s:3 * s + 3], u[3 * m + 3 * s:3 * m + 3 * s + 3]
+    return big_q, big_u
+
+
+def per_cell(u, n):
+    """The flow motion (6n,) of ``motion``'s layout as n blocks of (U, A Omega), and back."""
+    return u.reshape(2, n, 3).transpose(1, 0, 2).ravel()
+
+
+def resistance_error(device, cases, k):
+    """The pairwise-additive mobility and resistance against the whole system (part 1a)."""
+    mesh = wb.mesh.sphere(A, k)
+    rows = []
+    for kind, n, spacing in cases:
+        bodies = [Body(mesh, position=p) for p in arrangement(kind, n, spacing)]
+        exact = embedded(solves(mesh, n, device), bodies, list(range(n)), n)
+        one, two = solves(mesh, 1, device), solves(mesh, 2, device)
+        lone = [embedded(one, bodies, [i], n) for i in range(n)]
+        pairs = {(i, j): embedded(two, bodies, [i, j], n) for i in range(n) for j in range(i + 1, n)}
+        q = sum(l[0] for l in lone) + sum(p[0] - lone[i][0] - lone[j][0] for (i, j), p in pairs.items())
+        u = sum(l[1] for l in lone) + sum(p[1] - lone[i][1] - lone[j][1] for (i, j), p in pairs.items())
+
+        def resistance(qu, cells):  # (R, R U) of the cells' block; the flow motion as loads
+            rows = np.concatenate([np.arange(6 * c, 6 * c + 6) for c in cells])
+            r = np.zeros_like(qu[0])
+            r[np.ix_(rows, rows)] = np.linalg.inv(qu[0][np.ix_(rows, rows)])
+            return r, r @ per_cell(qu[1], n)
+
+        alone = [resistance(lone[i], [i]) for i in range(n)]
+        parts = alone + [(r - alone[i][0] - alone[j][0], f - alone[i][1] - alone[j][1])
+                         for (i, j), p in pairs.items() for r, f in [resistance(p, [i, j])]]
+        r, f = sum(x[0] for x in parts), sum(x[1] for x in parts)
+        m = np.linalg.inv(r)
+        summed_resistance = (0.5 * (m + m.T), (m @ f).reshape(n, 2, 3).transpose(1, 0, 2).ravel())
+        (mobility_grand, mobility_flow), (resistance_grand, resistance_flow) = (
+            change(x, exact) for x in ((q, u), summed_resistance))
+        rows.append(dict(arrangement=kind, cells=n, spacing_um=spacing * 1e6, k=k, mobility_grand=mobility_grand,
+                         mobility_flow=mobility_flow, resistance_grand=resistance_grand,
+                         resistance_flow=resistance_flow))
+        print_table([rows[-1]])
     return rows
 
 
@@ -287,7 +343,7 @@ def cost_chart(rows, path):
 def main():
     parser = arguments(__doc__)
     parser.add_argument("--parts", nargs="+", default=["accuracy"],
-                        choices=["accuracy", "cutoff", "lattice", "reuse", "factors", "cost"])
+                        choices=["accuracy", "resistance", "cutoff", "lattice", "reuse", "factors", "cost"])
     parser.add_argument("--runs", nargs="*", default=[], help="run files for --parts reuse")
     parser.add_argument("--k", type=int, default=2, help="sphere mesh subdivisions")
     parser.add_argument("--cells", nargs="*", type=int, default=[],
@@ -300,6 +356,10 @@ def main():
                  [("line", 3, 12e-6), ("line", 3, 25e-6), ("patch", 4, 25e-6), ("patch", 9, 25e-6)])
         rows = accuracy(args.device, cases, args.k)
         print(f"wrote {write_csv('many_cells_accuracy.csv', rows)}")
+    if "resistance" in args.parts:
+        cases = [("line", 3, 25e-6)] if args.quick else [("line", 3, 12e-6), ("line", 3, 25e-6), ("patch", 4, 25e-6)]
+        rows = resistance_error(args.device, cases, args.k)
+        print(f"wrote {write_csv('many_cells_resistance.csv', rows)}")
     if "cutoff" in args.parts:
         rows = cutoff_error(args.device, 4 if args.quick else 8, 25e-6, [50e-6, 75e-6, 100e-6, 150e-6], args.k)
         print(f"wrote {write_csv('many_cells_cutoff.csv', rows)}")
