@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from thesis_ch4 import ROOT, write  # noqa: E402
+from thesis_ch4 import ROOT, save_chart, sweep_folders, write  # noqa: E402
 
 from warpbem.app.io import open_result  # noqa: E402
 from warpbem.app.plotting import _pyplot  # noqa: E402
@@ -71,24 +71,19 @@ def chart(traces: dict, out: Path) -> Path:
     side.set(xlabel="free cell along the flow from the rolling cell's centre [um]",
              ylabel="free cell's gap to the wall [nm]", title="the pass (star: first bond)")
     count.set(xlabel="time [ms]", ylabel="the free cell's bonds", title="bonds")
-    for ax in (side, count):
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
+    side.grid(alpha=0.3)
+    side.legend(fontsize=7)
     fig.suptitle("a free 5 um cell passing a cell rolling on stiff bonds (k_r0 = 1 /s, r0 = 0.6 A)")
-    fig.tight_layout()
-    fig.savefig(out, dpi=120)
-    plt.close(fig)
-    return out
+    return save_chart(plt, fig, count, out, 7)
 
 
 def main():
-    folders = [Path(name) for name in sys.argv[1:]] or [ROOT / "results" / "rolling_capture"]
-    rows, traces = table(folders)
-    if not rows:
-        print(f"{', '.join(map(str, folders))}: no runs (see this script's docstring)")
-        return
-    write(rows, "rolling_capture.csv")
-    print("chart:", chart(traces, ROOT / "docs" / "figures" / "rolling_capture.png"))
+    rows, traces = table(sweep_folders(sys.argv[1:], "rolling_capture"))
+    if rows:
+        write(rows, "rolling_capture.csv")
+        print("chart:", chart(traces, ROOT / "docs" / "figures" / "rolling_capture.png"))
+    else:
+        print("no runs in the folders given (see this script's docstring)")
 
 
 if __name__ == "__main__":

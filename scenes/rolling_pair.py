@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from thesis_ch4 import ROOT, write  # noqa: E402
+from thesis_ch4 import ROOT, sweep_folders, write  # noqa: E402
 
 from warpbem.app.io import open_result  # noqa: E402
 from warpbem.app.plotting import _pyplot  # noqa: E402
@@ -109,7 +109,7 @@ def chart(rows: list[dict], out: Path) -> Path:
 
 
 def main():
-    folders = [Path(name) for name in sys.argv[1:]] or [ROOT / "results" / "rolling_pair"]
+    folders = sweep_folders(sys.argv[1:], "rolling_pair")
     rows = table(folders)
     if not rows:
         print(f"{', '.join(map(str, folders))}: no runs (see this script's docstring)")

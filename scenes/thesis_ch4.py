@@ -271,6 +271,11 @@ def sweep(name: str, table) -> list[dict]:
     return rows
 
 
+def sweep_folders(argv: list[str], name: str) -> list[Path]:
+    """The sweep folders named on the command line, else results/<name>."""
+    return [Path(arg) for arg in argv] or [ROOT / "results" / name]
+
+
 def write(rows: list[dict], name: str):
     if not rows:
         return
