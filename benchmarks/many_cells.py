@@ -1,12 +1,21 @@
 """Many adhesive cells (issue 25), on the machine it runs on, side by side:
 
 1. accuracy: the grand mobility and the motion in the flow of n rigid 5 um cells at the rolling
-   height (heights spread by +-20 nm) from the pairs (``[solver] grand_mobility = "pairs"``,
-   dynamics/pairwise.py) against the whole system's solve, in the norm of
-   ``benchmarks/adhesion.py`` part 2c (largest change over largest entry): the pairs at the
-   cells' own positions ("pairwise": the approximation alone) and on the default lattices
-   ("pairs, lattices"), and the cells alone (no coupling, for scale); cells in a line along the
-   flow and in square patches;
+   height (heights spread by +-20 nm) against the whole system's solve, in the norm of
+   ``benchmarks/adhesion.py`` part 2c (largest change over largest entry), from
+   - the pairs (``[solver] grand_mobility = "pairs"``, dynamics/pairwise.py) at the cells' own
+     positions ("pairwise": the approximation alone) and on the default lattices ("pairs_lattices");
+   - the pairs at the cells' own positions plus the many-body remainder of a coarse mesh: its
+     whole system's solve minus its pairs, the three-body and higher part as that mesh sees it
+     (the k = 2 sphere, 24 elements, unrefined and with the contact refinement 0.5 and 1:
+     "remainder_RATIO");
+   - the unrefined remainder from local clusters ("local_0"): each cell's rows from the cells
+     within 2.05 pitches of it solved alone, a cost linear in the cells;
+   - the cells alone (no coupling, for scale);
+   cells in a line along the flow and in patches (rows of round(sqrt(n)) cells along the flow;
+   ``--cases line:3:12 patch:16:25 ...`` to choose). The whole system of 16 refined k = 2 cells
+   (78 000 unknowns) does not fit a dense matrix on a 24 GB machine: ``--refinement 1`` refines
+   every solve but the remainders' less (252 elements per cell instead of 1632);
 1a. resistance: the pairs' mobilities summed (the pairs' rule, at the cells' own positions) and
    the pairs' resistances summed and inverted (pairwise-additive resistance, Stokesian dynamics'
    rule for lubrication), both from direct solves of each cell alone and each pair alone,
@@ -32,7 +41,8 @@
    snapshots solved; the fitted exponent of the cost per step over n.
 
     python benchmarks/many_cells.py [--parts accuracy resistance cutoff lattice reuse factors cost] [--runs RUN.h5 ...] [--quick]
-        [--cells N ...] [--system-cells N ...] [--device cuda:0]
+        [--cells N ...] [--system-cells N ...] [--cases KIND:N:UM ...]
+        [--refinement R] [--device cuda:0]
 
 On a GPU, benchmarks/device_many_cells.sh measures the 8 x 8 patch's step on CUDA and on that
 machine's CPU side by side (part 2).
@@ -66,6 +76,16 @@ REST = A + 236e-9  # m: centre height where gravity and eq. 3.1 balance (benchma
 # the state diagram's rolling point on stiff bonds (scenes/rolling_cells.toml)
 ROLLING = dict(spring_constant=0.1, equilibrium_length=30e-9, off_rate=1.0, reactive_compliance=0.6e-10,
                on_rate=365.0, receptor_density=20e12, max_bonds=200)
+# the many-body remainder's coarse meshes (accuracy part, "remainder"): (subdivisions, solver
+# options); time-stepped models' defaults otherwise (density order 1, contact refinement 3)
+# (contact refinement ratios of the k = 2 sphere, 24 elements: 0 leaves it so, 0.5 and 1 split it
+# to 108 and 252 elements at the rolling height, the default 3 to 1632)
+COARSE_REMAINDERS = {f"remainder_{ratio:g}": ratio for ratio in (0.0, 0.5, 1.0)}
+COARSE_K = 2
+# the local remainder's clusters: the cells within this many pitches of each (two cells on in a
+# line, so that an end cell's cluster holds the cell that screens it from the next; 1.5 left the
+# flow's error of three cells in a line 25 um apart at 9.3e-4, the pairs')
+LOCAL_RADIUS = 2.05
 EXACT = dict(reuse_tolerance=1e-12, reuse_interaction=1e-12, pair_lateral=1e-12)  # lattices below round-off
 
 
@@ -95,23 +115,74 @@ def solves(mesh, n, device, **solver):
     return HydrodynamicSolves(model, build_solver(model.solver, model.flow, device))
 
 
-def accuracy(device, cases, k):
+def remainder(device, positions, coarse_k, options):
+    """(the many-body remainder (Q, flow motion), the coarse whole system's wall time) of cells
+    at ``positions`` on the coarse mesh (``coarse_k`` subdivisions, solver ``options``): the
+    coarse whole system's solve minus the coarse pairs at the cells' own positions, the part the
+    pairs leave out as the coarse mesh sees it."""
+    mesh = wb.mesh.sphere(A, coarse_k)
+    bodies = [Body(mesh, position=p) for p in positions]
+    hydro = solves(mesh, len(bodies), device, **options)
+    t = time.perf_counter()
+    system = motion(Motion.of(hydro.mobility.solve(bodies)), hydro._grand_mobility(bodies))
+    wall = time.perf_counter() - t
+    pairs = motion(*solves(mesh, len(bodies), device, **EXACT, grand_mobility="pairs", **options)._snapshot(bodies))
+    return tuple(a - b for a, b in zip(system, pairs)), wall
+
+
+def local_remainder(device, positions, coarse_k, options, radius):
+    """(the many-body remainder from local clusters, the clusters' wall time, the largest cluster):
+    each cell's rows of ``remainder`` solved for the cluster of cells within ``radius`` (m, along
+    the wall) of it alone, the grand mobility's then symmetrised: a cost linear in the cells for
+    clusters of bounded size, leaving out the many-body part through cells beyond the radius."""
+    n = len(positions)
+    q, u, wall, largest = np.zeros((6 * n, 6 * n)), np.zeros(6 * n), 0.0, 0
+    for i in range(n):
+        cells = list(np.flatnonzero(np.hypot(*(positions[:, :2] - positions[i, :2]).T) <= radius))
+        (cluster_q, cluster_u), cluster_wall = remainder(device, positions[cells], coarse_k, options)
+        cluster_q, cluster_u = embed(cluster_q, cluster_u, cells, n)
+        q[6 * i:6 * i + 6] = cluster_q[6 * i:6 * i + 6]
+        for part in (slice(3 * i, 3 * i + 3), slice(3 * n + 3 * i, 3 * n + 3 * i + 3)):
+            u[part] = cluster_u[part]
+        wall, largest = wall + cluster_wall, max(largest, len(cells))
+    return (0.5 * (q + q.T), u), wall, largest
+
+
+def accuracy(device, cases, k, refinement=None):
+    """Part 1 on ``cases`` ((arrangement, cells, spacing)), every solve but the coarse remainders'
+    on the k sphere refined with ``refinement`` (default: the time-stepped models' 3)."""
     mesh = wb.mesh.sphere(A, k)
+    fine = {} if refinement is None else dict(contact_refinement=refinement)
     rows = []
     for kind, n, spacing in cases:
-        bodies = [Body(mesh, position=p) for p in arrangement(kind, n, spacing)]
-        hydro = solves(mesh, n, device)
+        positions = arrangement(kind, n, spacing)
+        bodies = [Body(mesh, position=p) for p in positions]
+        hydro = solves(mesh, n, device, **fine)
         t = time.perf_counter()
         exact = motion(Motion.of(hydro.mobility.solve(bodies)), hydro._grand_mobility(bodies))
         t_system = time.perf_counter() - t
-        row = dict(arrangement=kind, cells=n, spacing_um=spacing * 1e6, k=k, system_s=t_system)
+        row = dict(arrangement=kind, cells=n, spacing_um=spacing * 1e6, k=k,
+                   refinement=hydro.model.solver.contact_refinement, system_s=t_system)
+        approximations = {}
         for name, options in (("pairwise", dict(EXACT, grand_mobility="pairs")),
                               ("pairs_lattices", dict(reuse_tolerance=2e-9, grand_mobility="pairs"))):
-            pairs = solves(mesh, n, device, **options)
+            pairs = solves(mesh, n, device, **options, **fine)
             t = time.perf_counter()
-            grand, flow = change(motion(*pairs._snapshot(bodies)), exact)
+            approximations[name] = motion(*pairs._snapshot(bodies))
+            grand, flow = change(approximations[name], exact)
             row.update({f"{name}_grand": grand, f"{name}_flow": flow, f"{name}_s": time.perf_counter() - t,
                         f"{name}_snapshots": pairs.snapshots_solved})
+        pairwise_grand, pairwise_flow = approximations["pairwise"]
+        for name, ratio in COARSE_REMAINDERS.items():  # added to the pairs at the cells' own positions
+            if ratio >= row["refinement"]:
+                continue  # no coarser than the reference itself
+            (grand, flow), wall = remainder(device, positions, COARSE_K, dict(contact_refinement=ratio))
+            row[f"{name}_grand"], row[f"{name}_flow"] = change((pairwise_grand + grand, pairwise_flow + flow), exact)
+            row[f"{name}_system_s"] = wall
+        (grand, flow), wall, largest = local_remainder(device, positions, COARSE_K, dict(contact_refinement=0.0),
+                                                       LOCAL_RADIUS * spacing)
+        row["local_0_grand"], row["local_0_flow"] = change((pairwise_grand + grand, pairwise_flow + flow), exact)
+        row["local_0_s"], row["local_largest_cluster"] = wall, largest
         alone = solves(mesh, n, device, **EXACT, grand_mobility="pairs", pair_cutoff=0.0)
         row["alone_grand"], row["alone_flow"] = change(motion(*alone._snapshot(bodies)), exact)
         rows.append(row)
@@ -122,8 +193,12 @@ def accuracy(device, cases, k):
 def embedded(hydro, bodies, cells, n):
     """(Q (6n, 6n), flow motion (6n,)) of the ``cells`` among n solved alone, in the n cells'
     layout: Q by loads on each cell in turn, the motion as ``motion`` gives it."""
-    q, u = motion(Motion.of(hydro.mobility.solve([bodies[c] for c in cells])),
-                  hydro._grand_mobility([bodies[c] for c in cells]))
+    return embed(*motion(Motion.of(hydro.mobility.solve([bodies[c] for c in cells])),
+                         hydro._grand_mobility([bodies[c] for c in cells])), cells, n)
+
+
+def embed(q, u, cells, n):
+    """(Q, flow motion) of the ``cells`` in the layout of n cells (zero elsewhere)."""
     m, rows = len(cells), np.concatenate([np.arange(6 * c, 6 * c + 6) for c in cells])
     big_q, big_u = np.zeros((6 * n, 6 * n)), np.zeros(6 * n)
     big_q[np.ix_(rows, rows)] = q
@@ -348,13 +423,20 @@ def main():
     parser.add_argument("--k", type=int, default=2, help="sphere mesh subdivisions")
     parser.add_argument("--cells", nargs="*", type=int, default=[],
                         help="the cell counts of --parts cost (default 1 3 8 16 64; 1 3 with --quick)")
+    parser.add_argument("--cases", nargs="*", default=[],
+                        help="--parts accuracy's cases as ARRANGEMENT:CELLS:SPACING_UM (line or patch), e.g. patch:16:25")
+    parser.add_argument("--refinement", type=float, default=None,
+                        help="--parts accuracy: the contact refinement of every solve but the coarse remainders'"
+                             " (default 3, the time-stepped models')")
     parser.add_argument("--system-cells", nargs="*", type=int, default=None,
                         help="the counts of --parts cost solved as whole systems too (default 3)")
     args = parser.parse_args()
     if "accuracy" in args.parts:
         cases = ([("line", 3, 25e-6)] if args.quick else
                  [("line", 3, 12e-6), ("line", 3, 25e-6), ("patch", 4, 25e-6), ("patch", 9, 25e-6)])
-        rows = accuracy(args.device, cases, args.k)
+        if args.cases:
+            cases = [(kind, int(n), float(um) * 1e-6) for kind, n, um in (c.split(":") for c in args.cases)]
+        rows = accuracy(args.device, cases, args.k, args.refinement)
         print(f"wrote {write_csv('many_cells_accuracy.csv', rows)}")
     if "resistance" in args.parts:
         cases = [("line", 3, 25e-6)] if args.quick else [("line", 3, 12e-6), ("line", 3, 25e-6), ("patch", 4, 25e-6)]

@@ -115,8 +115,8 @@ class SolverOptions:
                                  " snapshots of every pair within pair_cutoff, shared by pairs of the same offset and"
                                  " heights: a cost linear in the cells, for free spherical cells tens of"
                                  " micrometres apart, leaving out the three-body part: 9.3e-4 of the flow's motion"
-                                 " in a line 25 um apart, 7.5e-3 in a 3 x 3 patch; dynamics/pairwise.py, README"
-                                 " 'Many adhesive cells')", choices=GRAND_MOBILITIES)
+                                 " in a line 25 um apart, 7.5e-3 in a 3 x 3 patch, 1.2e-2 in a 4 x 4 one;"
+                                 " dynamics/pairwise.py, README 'Many adhesive cells')", choices=GRAND_MOBILITIES)
     pair_lateral: float = option(DEFAULT_PAIR_LATERAL, "with grand_mobility = 'pairs', the lateral lattice of the pair"
                                  " snapshots at contact distance, growing as (distance / contact)^(5/2) in steps of 2"
                                  " up to distance / 8; each pair interpolated bilinearly between its lattice points",
