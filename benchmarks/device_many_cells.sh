@@ -10,7 +10,7 @@ export PYTHONUNBUFFERED=1
 out=${OUT:-results/bench}
 mkdir -p "$out"
 for device in cuda:0 cpu; do
-    .venv/bin/python benchmarks/many_cells.py --parts cost --cells 64 --system-cells --device "$device" \
+    .venv/bin/python benchmarks/many_cells.py --parts cost --cells 64 --system-cells --remainder-cells --device "$device" \
         2>&1 | tee "$out/many_cells_$device.log"
     cp results/bench/many_cells_cost.csv "$out/many_cells_cost_${device/:/}.csv"
 done

@@ -37,11 +37,12 @@
    each cell's LU taken from the store when its shape and height were seen) and without, the two
    interleaved; wall time per snapshot and the store's hits;
 2. cost per step: n cells rolling on stiff bonds (the state diagram's rolling point) for a
-   short run from the same start, pairs against the whole system's snapshots, wall time and
+   short run from the same start, pairs, pairs with the coarse many-body remainder
+   (``--remainder-cells``) and the whole system's snapshots (``--system-cells``), wall time and
    snapshots solved; the fitted exponent of the cost per step over n.
 
     python benchmarks/many_cells.py [--parts accuracy resistance cutoff lattice reuse factors cost] [--runs RUN.h5 ...] [--quick]
-        [--cells N ...] [--system-cells N ...] [--cases KIND:N:UM ...]
+        [--cells N ...] [--system-cells N ...] [--remainder-cells N ...] [--cases KIND:N:UM ...]
         [--refinement R] [--device cuda:0]
 
 On a GPU, benchmarks/device_many_cells.sh measures the 8 x 8 patch's step on CUDA and on that
@@ -86,6 +87,10 @@ COARSE_K = 2
 # line, so that an end cell's cluster holds the cell that screens it from the next; 1.5 left the
 # flow's error of three cells in a line 25 um apart at 9.3e-4, the pairs')
 LOCAL_RADIUS = 2.05
+# the snapshots of --parts cost: the pairs, the pairs with the coarse many-body remainder
+# (dynamics/many_body.py), the whole system's
+MODES = {"pairs": dict(grand_mobility="pairs"), "remainder": dict(grand_mobility="pairs", many_body="coarse"),
+         "system": dict(grand_mobility="system")}
 EXACT = dict(reuse_tolerance=1e-12, reuse_interaction=1e-12, pair_lateral=1e-12)  # lattices below round-off
 
 
@@ -353,34 +358,40 @@ def factor_store(device, k, count):
 
 def rolling_patch(n, spacing, mode, k=3, seed=1):
     """(model, state) of n rigid cells rolling on stiff bonds, released at the rest height in a
-    line (n <= 3) or a square patch, with ``mode`` "system" or "pairs" snapshots."""
+    line (n <= 3) or a square patch, with the snapshots of ``mode`` (MODES)."""
     mesh = wb.mesh.sphere(A, k)
     interactions = [Gravity([1050.0] * n, 1000.0, STANDARD_GRAVITY), Repulsion(),
                     Adhesion(BondOptions(**ROLLING, seed=seed))]
     model = Model([mesh] * n, [False] * n, Flow(100.0, 1e-3), interactions=interactions,
-                  solver=SolverOptions(reuse_tolerance=2e-9, grand_mobility=mode),
+                  solver=SolverOptions(reuse_tolerance=2e-9, **MODES[mode]),
                   policy=StepPolicy(1e-3, 1e-8, 1e-9), scheme="euler")
     positions = arrangement("line" if n <= 3 else "patch", n, spacing, seed)
     positions[:, 2] = REST
     return model, model.initial_state(positions)
 
 
-def cost(device, counts, system_counts, spacing, end):
-    """Wall time of n rolling cells over ``end`` s, pairs (and the whole system's snapshots for
-    ``system_counts``) side by side: the median step that solved no new snapshot (the cost that
-    must grow linearly), the snapshots solved and the time they took (the steps' excess over that
+def solved_snapshots(hydro):
+    """The snapshots ``hydro`` solved so far: lone, pair or whole-system ones, and remainders."""
+    remainder = hydro.pairwise.remainder if hydro.pairwise is not None else None
+    return hydro.snapshots_solved + (remainder.solved if remainder is not None else 0)
+
+
+def cost(device, counts_by_mode, spacing, end):
+    """Wall time of n rolling cells over ``end`` s, for the cell counts of each mode (MODES) side
+    by side: the median step that solved no new snapshot (the cost that must grow linearly), the
+    snapshots solved (remainders included) and the time they took (the steps' excess over that
     median), the memory of the kept snapshots and the process's peak resident memory so far."""
     rows = []
-    for mode, ns in (("pairs", counts), ("system", system_counts)):
+    for mode, ns in counts_by_mode.items():
         for n in ns:
             model, state = rolling_patch(n, spacing, mode)
             sim = Simulator(model, device)
             walls, solved, t0 = [], [], time.perf_counter()
             while state.time < end:
-                before, t = sim.hydro.snapshots_solved, time.perf_counter()
+                before, t = solved_snapshots(sim.hydro), time.perf_counter()
                 state, frame = sim.step(state, end)
                 walls.append(time.perf_counter() - t)
-                solved.append(sim.hydro.snapshots_solved - before)
+                solved.append(solved_snapshots(sim.hydro) - before)
             walls, solved = np.array(walls), np.array(solved)
             plain = float(np.median(walls[solved == 0])) if np.any(solved == 0) else float("nan")
             kept = list(sim.hydro._pairs.values()) + list(sim.hydro._snapshots.values())
@@ -406,7 +417,7 @@ def exponent(rows, key):
 def cost_chart(rows, path):
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 4))
-    for mode, marker in (("pairs", "o"), ("system", "s")):
+    for mode, marker in (("pairs", "o"), ("remainder", "^"), ("system", "s")):
         sel = [r for r in rows if r["mode"] == mode]
         if sel:
             ax.loglog([r["cells"] for r in sel], [r["step_s"] for r in sel], marker=marker, label=mode)
@@ -423,6 +434,9 @@ def main():
     parser.add_argument("--k", type=int, default=2, help="sphere mesh subdivisions")
     parser.add_argument("--cells", nargs="*", type=int, default=[],
                         help="the cell counts of --parts cost (default 1 3 8 16 64; 1 3 with --quick)")
+    parser.add_argument("--remainder-cells", nargs="*", type=int, default=None,
+                        help="the counts of --parts cost run on pairs with the coarse many-body remainder too"
+                             " (default 16)")
     parser.add_argument("--cases", nargs="*", default=[],
                         help="--parts accuracy's cases as ARRANGEMENT:CELLS:SPACING_UM (line or patch), e.g. patch:16:25")
     parser.add_argument("--refinement", type=float, default=None,
@@ -461,10 +475,12 @@ def main():
         rows = factor_store(args.device, 2 if args.quick else 3, 3 if args.quick else 6)
         print(f"wrote {write_csv('many_cells_factors.csv', rows)}")
     if "cost" in args.parts:
-        counts, system_counts, end = ([1, 3], [3], 5e-4) if args.quick else ([1, 3, 8, 16, 64], [3], 2e-3)
+        counts, system_counts, remainder_counts, end = (([1, 3], [3], [], 5e-4) if args.quick else
+                                                        ([1, 3, 8, 16, 64], [3], [16], 2e-3))
         counts = args.cells or counts
         system_counts = system_counts if args.system_cells is None else args.system_cells
-        rows = cost(args.device, counts, system_counts, 25e-6, end)
+        remainder_counts = remainder_counts if args.remainder_cells is None else args.remainder_cells
+        rows = cost(args.device, {"pairs": counts, "remainder": remainder_counts, "system": system_counts}, 25e-6, end)
         several = [r for r in rows if r["mode"] == "pairs" and r["cells"] > 1]
         if len(several) > 1:
             slope, _ = exponent(several, "step_s")

@@ -119,6 +119,60 @@ def test_between_lattice_points_the_pair_is_interpolated_to_second_order_in_the_
     assert errors[100e-9] < snapped / 10  # the nearest point of the finer lattice, 67 nm away, errs 10x more
 
 
+def patch(side, pitch=10e-6, seed=1):
+    """side x side cells ``pitch`` apart at the rolling height, heights spread by +-20 nm."""
+    rng = np.random.default_rng(seed)
+    return [Body(MESH, position=(pitch * (i % side), pitch * (i // side), HEIGHT + rng.uniform(-20e-9, 20e-9)))
+            for i in range(side * side)]
+
+
+@pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
+def test_the_coarse_remainder_brings_the_pairs_of_a_patch_to_the_whole_system():
+    """The pairs leave out the coupling through third cells; the coarse cells' whole system minus
+    their pairs puts it back (many_body.py: M ~ M_pairs + [M_system(coarse) - M_pairs(coarse)]).
+    On 2 x 2 cells five radii apart, against the whole system's direct solve on the same mesh,
+    the pairs err by 8.9e-4 / 7.9e-4 (grand mobility / flow's motion) and with the remainder by
+    8.7e-5 / 1.3e-4 (10 and 6 times less). Every solve but the coarse one refined with contact
+    ratio 1, as benchmarks/many_cells.py --refinement 1, to keep the test short."""
+    bodies = patch(2)
+    hydro = solves(4, contact_refinement=1.0)
+    direct = motion(Motion.of(hydro.mobility.solve(bodies)), hydro._grand_mobility(bodies))
+    pairs, corrected = (relative_change(motion(*solves(4, **EXACT, grand_mobility="pairs", contact_refinement=1.0,
+                                                       many_body=mode)._snapshot(bodies)), direct)
+                        for mode in ("none", "coarse"))
+    assert pairs[1] > 5e-4  # the part the pairs leave out, which the check would miss
+    assert corrected[0] < pairs[0] / 5 and corrected[1] < pairs[1] / 5
+
+
+@pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
+def test_the_remainder_is_kept_on_its_lattice_relative_to_the_first_cell():
+    """The remainder is a snapshot of the state snapped to many_body_lateral along the wall (and
+    heights rounded up to 50 nm), keyed relative to the first cell: the patch moved as a whole, or
+    one cell by less than half the lattice, takes the kept one (the same numbers, no solve); one
+    cell moved by a lattice spacing solves a new one that differs."""
+    hydro = solves(4, reuse_tolerance=2e-9, grand_mobility="pairs", many_body="coarse", many_body_lateral=1e-6)
+    remainder = hydro.pairwise.remainder
+    bodies = patch(2)
+    first = remainder.parts(bodies)
+
+    def moved(shifts):
+        return [Body(MESH, position=b.position + np.append(s, 0.0)) for b, s in zip(bodies, shifts)]
+
+    for shifts in ([(7e-6, -3e-6)] * 4, [(0.0, 0.0)] * 3 + [(0.3e-6, -0.3e-6)]):
+        again = remainder.parts(moved(shifts))
+        assert remainder.solved == 1
+        for a, b in zip(again, first):
+            np.testing.assert_array_equal(a, b)
+    other = remainder.parts(moved([(0.0, 0.0)] * 3 + [(1e-6, 0.0)]))
+    assert remainder.solved == 2
+    assert np.abs(other[0] - first[0]).max() > 1e-3 * np.abs(first[0]).max()
+
+
+def test_the_many_body_remainder_needs_the_pairs():
+    with pytest.raises(OptionError, match="many_body: 'coarse' corrects the pairs' grand mobility; it needs"):
+        SolverOptions(reuse_tolerance=2e-9, many_body="coarse")
+
+
 def test_pairs_refuse_fixed_and_non_spherical_cells_and_no_snapshots():
     spheroid = wb.mesh.spheroid(A, 0.5 * A, 2)
     with pytest.raises(OptionError, match="grand_mobility = 'pairs' takes free spherical cells only"):

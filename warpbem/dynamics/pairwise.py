@@ -53,6 +53,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..surfaces.body import Body
+from .many_body import ManyBodyRemainder
 
 # y -> -y: a (basis) load's force keeps x, z and its torque (a pseudovector) keeps y; the
 # motion's velocity and angular velocity alike
@@ -166,11 +167,13 @@ class PairwiseMobility:
         # of the last assembly: (pairs (2, P), each one's lattice square, spacing and heights (P, 5),
         # which of its points' rows were looked up (P, 4), those rows (P, 4, row))
         self._squares = None
+        self.remainder = ManyBodyRemainder(hydro) if model.solver.many_body == "coarse" else None
 
     def assemble(self, bodies):
         """(flow velocity, angular velocity (n, 3); basis velocity, angular velocity (6n, n, 3),
         iterations, residual) of the free ``bodies``: each cell's lone snapshot at its fine
-        height, plus the pairs' part."""
+        height, plus the pairs' part, plus the many-body remainder if asked for
+        (``many_body.py``)."""
         hydro = self.hydro
         velocity, angular, basis_velocity, basis_angular = self._pairs_part(bodies)
         iterations, residual = 0, 0.0
@@ -183,6 +186,9 @@ class PairwiseMobility:
             basis_angular[rows, b] += grand.angular_velocity[:, 0]
             iterations += flow.iterations + grand.iterations
             residual = max(residual, flow.residual, grand.residual)
+        if self.remainder is not None:
+            for total, part in zip((velocity, angular, basis_velocity, basis_angular), self.remainder.parts(bodies)):
+                total += part
         return velocity, angular, basis_velocity, basis_angular, iterations, residual
 
     def _pairs_part(self, bodies):

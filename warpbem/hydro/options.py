@@ -36,6 +36,12 @@ DEFAULT_TOLERANCE = {"float64": 1e-8, "float32": 1e-6}
 DEFAULT_CUTOFF = 40e-6
 NEAR_FAR_SPLITS = ("auto", "on", "off")
 GRAND_MOBILITIES = ("system", "pairs")
+MANY_BODY_REMAINDERS = ("none", "coarse")
+# m: the lateral lattice of the many-body remainder's snapshots (dynamics/many_body.py): nine cells
+# of a 3 x 3 patch 25 um apart each moved at random within +-0.5 um (+-1 um) of their positions
+# raised the remainder's error from 1.2e-4 / 8.9e-4 (grand mobility / flow) to 1.5e-4 / 1.1e-3
+# (1.8e-4 / 1.3e-3; a script of the session that measured benchmarks/many_cells.py --parts accuracy)
+DEFAULT_MANY_BODY_LATERAL = 1e-6
 # m: the pair lattice at contact distance (dynamics/pairwise.py), interpolated bilinearly: 250 nm
 # up to 1.32 contact distances (13.2 um between 5 um cells), 2 um at 25 um; two cells 12.5 um
 # apart interpolate to 3.4e-4 of the grand mobility on a 500 nm lattice, 1.6e-3 on a 1 um one
@@ -117,6 +123,15 @@ class SolverOptions:
                                  " micrometres apart, leaving out the three-body part: 9.3e-4 of the flow's motion"
                                  " in a line 25 um apart, 7.5e-3 in a 3 x 3 patch, 1.2e-2 in a 4 x 4 one;"
                                  " dynamics/pairwise.py, README 'Many adhesive cells')", choices=GRAND_MOBILITIES)
+    many_body: str = option("none", "with grand_mobility = 'pairs', 'coarse' adds the part the pairs leave out (three"
+                            " cells and more) from coarse cells (the k = 2 sphere, 24 elements, unrefined): their"
+                            " whole system's solve minus their pairs, kept on a lattice of many_body_lateral. 4 x 4"
+                            " cells 25 um apart: 1.3e-4 / 1.5e-3 of the grand mobility / flow's motion against the"
+                            " pairs' 1.7e-3 / 1.2e-2 (dynamics/many_body.py, README 'Many adhesive cells')",
+                            choices=MANY_BODY_REMAINDERS)
+    many_body_lateral: float = option(DEFAULT_MANY_BODY_LATERAL, "with many_body = 'coarse', the lateral lattice of"
+                                      " the cells' positions the remainder is solved at", "m", low=0.0, high=1e-4,
+                                      low_open=True)
     pair_lateral: float = option(DEFAULT_PAIR_LATERAL, "with grand_mobility = 'pairs', the lateral lattice of the pair"
                                  " snapshots at contact distance, growing as (distance / contact)^(5/2) in steps of 2"
                                  " up to distance / 8; each pair interpolated bilinearly between its lattice points",
@@ -134,6 +149,9 @@ class SolverOptions:
 
     def __post_init__(self):
         validate(self)
+        if self.many_body != "none" and self.grand_mobility != "pairs":
+            raise OptionError(f"many_body: {self.many_body!r} corrects the pairs' grand mobility; it needs"
+                              " grand_mobility = 'pairs' (the whole system's holds every cell already)")
         if self.reuse_interaction is not None and not self.reuse_interaction >= self.reuse_tolerance > 0:
             raise OptionError(f"reuse_interaction: {self.reuse_interaction:g} is outside the allowed range"
                               f" [{max(self.reuse_tolerance, 1e-12):g}, 1e-06] (>= reuse_tolerance > 0)")
