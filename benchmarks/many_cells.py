@@ -5,6 +5,8 @@
    ``benchmarks/adhesion.py`` part 2c (largest change over largest entry), from
    - the pairs (``[solver] grand_mobility = "pairs"``, dynamics/pairwise.py) at the cells' own
      positions ("pairwise": the approximation alone) and on the default lattices ("pairs_lattices");
+   - the pairs with ``[solver] many_body = "coarse"`` (dynamics/many_body.py) at the cells' own
+     positions ("pairs_remainder": its remainder on its lattice, 1 um, heights rounded up to 50 nm);
    - the pairs at the cells' own positions plus the many-body remainder of a coarse mesh: its
      whole system's solve minus its pairs, the three-body and higher part as that mesh sees it
      (the k = 2 sphere, 24 elements, unrefined and with the contact refinement 0.5 and 1:
@@ -170,7 +172,8 @@ def accuracy(device, cases, k, refinement=None):
                    refinement=hydro.model.solver.contact_refinement, system_s=t_system)
         approximations = {}
         for name, options in (("pairwise", dict(EXACT, grand_mobility="pairs")),
-                              ("pairs_lattices", dict(reuse_tolerance=2e-9, grand_mobility="pairs"))):
+                              ("pairs_lattices", dict(reuse_tolerance=2e-9, grand_mobility="pairs")),
+                              ("pairs_remainder", dict(EXACT, grand_mobility="pairs", many_body="coarse"))):
             pairs = solves(mesh, n, device, **options, **fine)
             t = time.perf_counter()
             approximations[name] = motion(*pairs._snapshot(bodies))
