@@ -64,7 +64,7 @@ def main():
     parser.add_argument("--heights", type=float, nargs="+", default=[3.0, 1.5, 1.2, 1.1, 1.05])
     args = parser.parse_args()
     keys = ["U", "Omega", "f_star", "t_star", "Ft", "Tr", "lam"]
-    header = f"| config | h/a | points | " + " | ".join(keys) + " | GMRES its | s/solve |"
+    header = "| config | h/a | points | " + " | ".join(keys) + " | GMRES its | s/solve |"
     print(header)
     print("|" + "---|" * (len(keys) + 5))
     for name, (k, p, ratio) in CONFIGS.items():

@@ -16,7 +16,7 @@ import argparse
 import numpy as np
 
 from common import best_time, print_table, write_csv
-from warpbem import Body, mesh, runtime
+from warpbem import Body, mesh
 from warpbem.kernels import launch
 from warpbem.hydro.geometry import SurfaceGeometry
 from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions

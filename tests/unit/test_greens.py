@@ -3,7 +3,6 @@ the Blake (1971) wall solution (thesis appendix A): no slip on z = 0, continuity
 balance, Sigma being the stress of G, reciprocity, and the free-space limit far from the wall."""
 
 import numpy as np
-import pytest
 
 from warpbem import runtime
 

@@ -379,7 +379,6 @@ def test_the_gaps_leave_out_the_cells_own_contact_loads_with_the_fluids_answer_t
     cell off its bonds within 0.8 ms (repulsion 2.7 nN, vertical velocity 1.3 mm/s; measured).
     With ``own_loads_in_gaps`` the displacement is the same and none of it is left out."""
     from warpbem.forces.interaction import Loads
-    from warpbem.surfaces.body import Body
     from warpbem.surfaces.gaps import WALL
 
     mesh = wb.mesh.sphere(A, 4)
