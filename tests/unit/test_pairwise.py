@@ -213,20 +213,24 @@ mesh = { shape = "sphere", radius = 2.0e-6, subdivisions = 2 }
 
 
 @pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
-@pytest.mark.parametrize("count, pitch", [((2, 1), (10e-6, 0.0)), ((4, 4), (10e-6, 10e-6))],
-                         ids=["two cells", "a 4 x 4 patch"])
-def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_path, count, pitch):
-    """Adhesive cells on pair snapshots (two, and sixteen in a patch): a run killed after 2
-    frames and resumed forms the same bonds and ends within 1e-9 radii of where the
-    uninterrupted one ends (as one cell's, test_adhesion.py: its solves start GMRES from another
-    previous solution); for two cells a second run with the same seed also repeats the first bit
-    for bit (the pairs' part is a function of the state alone: the lattice points' snapshots and
-    their weights, so which snapshots a run happens to keep changes no number)."""
+@pytest.mark.parametrize("count, pitch, many_body", [((2, 1), (10e-6, 0.0), "none"), ((4, 4), (10e-6, 10e-6), "none"),
+                                                     ((3, 1), (10e-6, 0.0), "coarse")],
+                         ids=["two cells", "a 4 x 4 patch", "three in a line with the remainder"])
+def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_path, count, pitch, many_body):
+    """Adhesive cells on pair snapshots (two, sixteen in a patch, and three in a line with the
+    many-body remainder): a run killed after 2 frames and resumed forms the same bonds and ends
+    within 1e-9 radii of where the uninterrupted one ends (as one cell's, test_adhesion.py: its solves
+    start GMRES from another previous solution); for two cells a second run with the same seed
+    also repeats the first bit for bit (the pairs' part is a function of the state alone: the
+    lattice points' snapshots and their weights, so which snapshots a run happens to keep changes
+    no number; the remainder's likewise, many_body.py)."""
     from warpbem.app import run
 
     path = tmp_path / "pairs.toml"
     scene = PAIRS_SCENE.replace("count = [2, 1]", f"count = [{count[0]}, {count[1]}]")
-    if count != (2, 1):  # sixteen cells, each coupled to its nearest neighbours (the pairs 10 um apart) on
+    if many_body != "none":
+        scene = scene.replace('grand_mobility = "pairs"', f'grand_mobility = "pairs"\nmany_body = "{many_body}"')
+    if count != (2, 1):  # four or sixteen cells, each coupled to its nearest neighbours (the pairs 10 um apart) on
         # coarser lattices (2 um at 10 um, heights to 200 nm): few pair snapshots
         scene = scene.replace("pitch = [10.0e-6, 0.0]", f"pitch = [{pitch[0]}, {pitch[1]}]").replace(
             'grand_mobility = "pairs"',
