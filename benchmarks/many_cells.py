@@ -79,10 +79,9 @@ REST = A + 236e-9  # m: centre height where gravity and eq. 3.1 balance (benchma
 # the state diagram's rolling point on stiff bonds (scenes/rolling_cells.toml)
 ROLLING = dict(spring_constant=0.1, equilibrium_length=30e-9, off_rate=1.0, reactive_compliance=0.6e-10,
                on_rate=365.0, receptor_density=20e12, max_bonds=200)
-# the many-body remainder's coarse meshes (accuracy part, "remainder"): (subdivisions, solver
-# options); time-stepped models' defaults otherwise (density order 1, contact refinement 3)
-# (contact refinement ratios of the k = 2 sphere, 24 elements: 0 leaves it so, 0.5 and 1 split it
-# to 108 and 252 elements at the rolling height, the default 3 to 1632)
+# the accuracy part's coarse remainders: column name -> contact refinement ratio of the k = 2
+# sphere (24 elements: 0 leaves it so, 0.5 and 1 split it to 108 and 252 elements at the rolling
+# height, the default 3 to 1632); time-stepped models' defaults otherwise (density order 1)
 COARSE_REMAINDERS = {f"remainder_{ratio:g}": ratio for ratio in (0.0, 0.5, 1.0)}
 COARSE_K = 2
 # the local remainder's clusters: the cells within this many pitches of each (two cells on in a

@@ -15,7 +15,9 @@ own near-wall mobility, by far the largest) cancel; the coupling through third c
 tens of micrometres, where the coarse mesh resolves it. On 4 x 4 cells 25 um apart the errors
 fall from 1.7e-3 / 1.2e-2 (grand mobility / flow) to 1.3e-4 / 1.5e-3, on 3 x 3 to 1.2e-4 /
 8.9e-4, at 1/13-1/56 of the whole system's fine solve; at 12 um (2 um between the surfaces) only
-to 2.1e-3 / 4.4e-3, since the coarse mesh does not resolve the gap between the cells.
+to 2.1e-3 / 4.4e-3, since the coarse mesh does not resolve the gap between the cells (the
+remainder at the cells' own positions; on its lattice, below, 1.3e-4 / 1.7e-3, 1.3e-4 / 9.5e-4
+and 2.3e-3 / 4.2e-3, the benchmark's column "pairs_remainder").
 
 The remainder is a snapshot as the others are (``hydrodynamics.py``): the cells' lateral
 positions snapped to ``many_body_lateral`` (1 um: moving each of nine cells at random by up to

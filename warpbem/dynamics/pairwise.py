@@ -21,7 +21,7 @@ neighbours; 1.7e-3 and 1.2e-2 in a 4 x 4 one), and by 3.5e-2 at 12 um in a line 
 the surfaces, where the middle cell screens the outer two). So the pairs serve lines and sparse
 patches of cells tens of micrometres apart, and the whole system's snapshot close trains (the
 default). The part left out, taken from a coarse mesh's whole system (24-element cells), cuts
-the 4 x 4 patch's errors to 1.3e-4 and 1.5e-3 (``[solver] many_body = "coarse"``,
+the 4 x 4 patch's errors to 1.3e-4 and 1.7e-3 (``[solver] many_body = "coarse"``,
 ``many_body.py``, added to the assembly here).
 
 A pair above the wall in shear is invariant under translation along the wall, so its snapshot

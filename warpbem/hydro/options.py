@@ -126,10 +126,9 @@ class SolverOptions:
     many_body: str = option("none", "with grand_mobility = 'pairs', 'coarse' adds the part the pairs leave out (three"
                             " cells and more) from coarse cells (the k = 2 sphere, 24 elements, unrefined): their"
                             " whole system's solve minus their pairs, kept on a lattice of many_body_lateral. 4 x 4"
-                            " cells 25 um apart: 1.3e-4 / 1.5e-3 of the grand mobility / flow's motion against the"
-                            " pairs' 1.7e-3 / 1.2e-2 (the remainder at the cells' own positions); 2 um between the"
-                            " cells: 4.4e-3 of the flow's against 1.9e-2 (dynamics/many_body.py, README 'Many"
-                            " adhesive cells')",
+                            " cells 25 um apart: 1.3e-4 / 1.7e-3 of the grand mobility / flow's motion against the"
+                            " pairs' 1.7e-3 / 1.2e-2; 2 um between the cells: 4.2e-3 of the flow's against 1.9e-2"
+                            " (dynamics/many_body.py, README 'Many adhesive cells')",
                             choices=MANY_BODY_REMAINDERS)
     many_body_lateral: float = option(DEFAULT_MANY_BODY_LATERAL, "with many_body = 'coarse', the lateral lattice of"
                                       " the cells' positions the remainder is solved at", "m", low=0.0, high=1e-4,
