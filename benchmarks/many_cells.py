@@ -11,6 +11,8 @@
      whole system's solve minus its pairs, the three-body and higher part as that mesh sees it
      (the k = 2 sphere, 24 elements, unrefined and with the contact refinement 0.5 and 1:
      "remainder_RATIO");
+   - each fine cell alone plus the pairs' part of the coarse mesh ("coarse_pairs_RATIO": the
+     coupling itself from the coarse pairs, which would make a pair snapshot 20-30 times cheaper);
    - the unrefined remainder from local clusters ("local_0"): each cell's rows from the cells
      within 2.05 pitches of it solved alone, a cost linear in the cells;
    - the cells alone (no coupling, for scale);
@@ -121,18 +123,26 @@ def solves(mesh, n, device, **solver):
     return HydrodynamicSolves(model, build_solver(model.solver, model.flow, device))
 
 
-def remainder(device, positions, coarse_k, options):
-    """(the many-body remainder (Q, flow motion), the coarse whole system's wall time) of cells
-    at ``positions`` on the coarse mesh (``coarse_k`` subdivisions, solver ``options``): the
-    coarse whole system's solve minus the coarse pairs at the cells' own positions, the part the
-    pairs leave out as the coarse mesh sees it."""
+def coarse_parts(device, positions, coarse_k, options):
+    """(the coarse whole system's (Q, flow motion), its wall time, the coarse pairs', the coarse
+    cells' alone) of cells at ``positions`` on the coarse mesh (``coarse_k`` subdivisions, solver
+    ``options``), each at the cells' own positions."""
     mesh = wb.mesh.sphere(A, coarse_k)
     bodies = [Body(mesh, position=p) for p in positions]
     hydro = solves(mesh, len(bodies), device, **options)
     t = time.perf_counter()
     system = motion(Motion.of(hydro.mobility.solve(bodies)), hydro._grand_mobility(bodies))
     wall = time.perf_counter() - t
-    pairs = motion(*solves(mesh, len(bodies), device, **EXACT, grand_mobility="pairs", **options)._snapshot(bodies))
+    pairs, alone = (motion(*solves(mesh, len(bodies), device, **EXACT, grand_mobility="pairs", pair_cutoff=cutoff,
+                                   **options)._snapshot(bodies)) for cutoff in (DEFAULT_PAIR_CUTOFF, 0.0))
+    return system, wall, pairs, alone
+
+
+def remainder(device, positions, coarse_k, options):
+    """(the many-body remainder (Q, flow motion), the coarse whole system's wall time): the coarse
+    whole system's solve minus the coarse pairs (``coarse_parts``), the part the pairs leave out
+    as the coarse mesh sees it."""
+    system, wall, pairs, _ = coarse_parts(device, positions, coarse_k, options)
     return tuple(a - b for a, b in zip(system, pairs)), wall
 
 
@@ -179,19 +189,25 @@ def accuracy(device, cases, k, refinement=None):
             grand, flow = change(approximations[name], exact)
             row.update({f"{name}_grand": grand, f"{name}_flow": flow, f"{name}_s": time.perf_counter() - t,
                         f"{name}_snapshots": pairs.snapshots_solved})
+        approximations["alone"] = motion(*solves(mesh, n, device, **EXACT, grand_mobility="pairs", pair_cutoff=0.0,
+                                                 **fine)._snapshot(bodies))
         pairwise_grand, pairwise_flow = approximations["pairwise"]
         for name, ratio in COARSE_REMAINDERS.items():  # added to the pairs at the cells' own positions
             if ratio >= row["refinement"]:
                 continue  # no coarser than the reference itself
-            (grand, flow), wall = remainder(device, positions, COARSE_K, dict(contact_refinement=ratio))
-            row[f"{name}_grand"], row[f"{name}_flow"] = change((pairwise_grand + grand, pairwise_flow + flow), exact)
+            system, wall, pairs, alone = coarse_parts(device, positions, COARSE_K, dict(contact_refinement=ratio))
+            row[f"{name}_grand"], row[f"{name}_flow"] = change(
+                tuple(a + s - p for a, s, p in zip(approximations["pairwise"], system, pairs)), exact)
             row[f"{name}_system_s"] = wall
+            # the coupling itself from the coarse pairs: each fine cell alone plus the coarse pairs'
+            # part (their pairs' snapshots minus the coarse cells alone)
+            row[f"coarse_pairs_{ratio:g}_grand"], row[f"coarse_pairs_{ratio:g}_flow"] = change(
+                tuple(a + p - c for a, p, c in zip(approximations["alone"], pairs, alone)), exact)
         (grand, flow), wall, largest = local_remainder(device, positions, COARSE_K, dict(contact_refinement=0.0),
                                                        LOCAL_RADIUS * spacing)
         row["local_0_grand"], row["local_0_flow"] = change((pairwise_grand + grand, pairwise_flow + flow), exact)
         row["local_0_s"], row["local_largest_cluster"] = wall, largest
-        alone = solves(mesh, n, device, **EXACT, grand_mobility="pairs", pair_cutoff=0.0)
-        row["alone_grand"], row["alone_flow"] = change(motion(*alone._snapshot(bodies)), exact)
+        row["alone_grand"], row["alone_flow"] = change(approximations["alone"], exact)
         rows.append(row)
         print_table([row])
     return rows

@@ -177,9 +177,7 @@ class HydrodynamicSolves:
         return np.concatenate([force[self.free], torque[self.free] / radii], axis=1).ravel()
 
     def _responses(self, bodies, load_force, load_torque) -> Responses:
-        solves = [self.mobility.solve(bodies, forces=PROBE_FORCE * f, torques=PROBE_FORCE * t,
-                                    check_placement_first=False, background=False)
-                  for f, t in zip(load_force, load_torque)]
+        solves = self.mobility.solve_loads(bodies, PROBE_FORCE * load_force, PROBE_FORCE * load_torque)
         stack = [np.array([getattr(s, name) for s in solves]) / PROBE_FORCE
                  for name in ("velocity", "angular_velocity", "force", "torque")]
         return Responses(*stack, load_force, load_torque, sum(s.iterations for s in solves),

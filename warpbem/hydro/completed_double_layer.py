@@ -229,6 +229,10 @@ class CompletedDoubleLayer:
         if self.treecode:
             return deflated_operator(lambda y, c: self.double_layer.apply(y, self.pole_forces(self.held_loads(c))),
                                      self.rigid, ~self.fixed, non_rigid_part=True)
+        if not self.fixed.any():  # no fixed body's response: the dense matrix on the CPU takes blocks of columns
+            blocks = self.double_layer.mode == "dense" and self.double_layer.device.is_cpu
+            return deflated_operator(lambda y, c: self.double_layer.apply(y), self.rigid, ~self.fixed,
+                                     non_rigid_part=True, blocks=blocks)
         return deflated_operator(lambda y, c: self.double_layer.apply(y), self.rigid, ~self.fixed,
                                  non_rigid_part=True, response=lambda c: self.fixed_columns @ self.held_loads(c))
 
@@ -295,7 +299,8 @@ class CompletedDoubleLayer:
                     out[rows] = scipy.linalg.lu_solve(factor, r[rows], check_finite=False)
             return out
 
-        self._block_jacobi = spla.LinearOperator((self.size, self.size), matvec=apply, dtype=np.float64)
+        # lu_solve takes a block of columns as it takes one (gmres_batch)
+        self._block_jacobi = spla.LinearOperator((self.size, self.size), matvec=apply, matmat=apply, dtype=np.float64)
         return self._block_jacobi
 
     def _block_key(self, body: int) -> bytes:

@@ -27,7 +27,7 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse.linalg as spla
 
-from .linalg import GMRESResult, gmres
+from .linalg import gmres, gmres_batch
 
 
 @dataclass(frozen=True)
@@ -54,9 +54,9 @@ class RigidModes:
         return cls(tuple(modes), tuple(factors), weights, ranges)
 
     def coefficients(self, body: int, x: np.ndarray) -> np.ndarray:
-        """<phi_p^l, x> for the six modes of body p."""
+        """<phi_p^l, x> for the six modes of body p ((6,), or (6, k) for the k columns of x)."""
         rows = self.ranges[body]
-        return self.modes[body].T @ (self.weights[rows] * x[rows])
+        return self.modes[body].T @ (self.weights[rows] * x[rows].T).T
 
     def to_raw(self, body: int, coefficients: np.ndarray) -> np.ndarray:
         """The raw coefficients (U, Omega) of the rigid field sum_l c_l phi_l: L^-T c."""
@@ -68,11 +68,14 @@ class RigidModes:
         return scipy.linalg.solve_triangular(self.cholesky[body], loads, lower=True)
 
 
-def deflated_operator(apply, modes: RigidModes, shifted, non_rigid_part: bool, response=None) -> spla.LinearOperator:
+def deflated_operator(apply, modes: RigidModes, shifted, non_rigid_part: bool, response=None,
+                      blocks: bool = False) -> spla.LinearOperator:
     """The deflated system M of the module docstring as a LinearOperator: ``apply(y, c)`` the
     operator on y (x~), given the rigid coefficients ``c`` ((n_bodies, 6)) for operators that
     sum the bodies' responses with it (the treecode); ``shifted``: per body, whether its rigid
-    part is mapped to itself (Wielandt); ``response(c)``: R(c), added last, or None."""
+    part is mapped to itself (Wielandt); ``response(c)``: R(c), added last, or None. ``blocks``:
+    ``apply`` takes (N, k) blocks (c then (n_bodies, 6, k)) and ``response`` is None, so
+    ``matmat`` applies M to k columns at once (``linalg.gmres_batch``); else column by column."""
     shifted = np.asarray(shifted, dtype=bool)
     size = len(modes.weights)
 
@@ -87,13 +90,17 @@ def deflated_operator(apply, modes: RigidModes, shifted, non_rigid_part: bool, r
                 out[rows] += rigid[rows]
         return out if response is None else out + response(c)
 
-    return spla.LinearOperator((size, size), matvec=matvec, dtype=np.float64)
+    if blocks and response is not None:
+        raise ValueError("a deflated operator with a response R(c) applies column by column")
+    return spla.LinearOperator((size, size), matvec=matvec, matmat=matvec if blocks else None, dtype=np.float64)
 
 
 def deflated_solve(system: spla.LinearOperator, rhs: np.ndarray, options, *, initial_guess=None,
-                   preconditioner=None, exact_preconditioner: bool = False) -> GMRESResult:
+                   preconditioner=None, exact_preconditioner: bool = False):
     """GMRES on a deflated system with the tolerance and iteration limit of ``options`` (a
-    resolved ``SolverOptions``)."""
-    return gmres(system, rhs, tolerance=options.tolerance, max_iterations=options.max_iterations,
-                 initial_guess=initial_guess, preconditioner=preconditioner,
-                 exact_preconditioner=exact_preconditioner)
+    resolved ``SolverOptions``): a GMRESResult, or for ``rhs`` of k columns (N, k) a list of
+    them (``gmres_batch``)."""
+    solver = gmres_batch if np.ndim(rhs) == 2 else gmres
+    return solver(system, rhs, tolerance=options.tolerance, max_iterations=options.max_iterations,
+                  initial_guess=initial_guess, preconditioner=preconditioner,
+                  exact_preconditioner=exact_preconditioner)

@@ -151,9 +151,68 @@ class MobilitySolver:
         torques = checked_loads("torques", torques, bodies)
         if check_placement_first:
             check_placement(bodies, self.flow.wall)
+        system, key, previous, length = self._system(bodies)
+        rhs, speed, force_scale = self._right_side(system, bodies, forces, torques, length, background, ambient_flow)
+        if initial_guess is not None and np.shape(initial_guess) != (system.size,):
+            raise ValueError(f"initial_guess must have shape ({system.size},) for this scene, got"
+                             f" {np.shape(initial_guess)} (the mesh or the bodies changed)")
+        if initial_guess is None and previous is not None and background:
+            # the previous solution is in the previous scaling: rescale the loads part with it
+            initial_guess = system.initial_guess(previous, self._last[1] * (self._last[2] / speed))
+        result = deflated_solve(system.linear_operator(), rhs, self.options, initial_guess=initial_guess,
+                                **self._preconditioning(system, previous, factor_every_body))
+        x = result.solution
+        if background or self._last is None or system is not self._last[0]:
+            self._last = (system, x, speed, key)
+        return self._solution(bodies, system, result, forces, torques, speed, length, force_scale)
 
+    def solve_loads(self, bodies, forces, torques, factor_every_body: bool = False) -> list[MobilitySolution]:
+        """The motion under each load (k, n, 3) of ``forces`` and ``torques`` alone, as ``solve``
+        with ``background=False`` gives it for each, all solved at once (``deflated.py``: one
+        GMRES per load whose products take the k columns together, so the dense matrix is read
+        once per iteration for all of them): the responses to a basis of loads (the grand
+        mobility, dynamics/hydrodynamics.py). The bodies' placement is not checked."""
+        bodies = checked_bodies(bodies)
+        loads = [(checked_loads("forces", f, bodies), checked_loads("torques", t, bodies))
+                 for f, t in zip(forces, torques)]
+        if not loads:
+            return []
+        system, key, previous, length = self._system(bodies)
+        parts = [self._right_side(system, bodies, f, t, length, False, None) for f, t in loads]
+        results = deflated_solve(system.linear_operator(), np.column_stack([rhs for rhs, _, _ in parts]),
+                                 self.options, **self._preconditioning(system, previous, factor_every_body))
+        if self._last is None or system is not self._last[0]:
+            self._last = (system, results[-1].solution, parts[-1][1], key)
+        return [self._solution(bodies, system, result, f, t, speed, length, force_scale)
+                for result, (f, t), (_, speed, force_scale) in zip(results, loads, parts)]
+
+    def _system(self, bodies):
+        """(the CompletedDoubleLayer system of ``bodies``, their key, the previous system or None,
+        the length scale L (m)): the previous one itself when the bodies are the very same."""
         length = float(np.mean([b.mesh.equivalent_radius() for b in bodies]))
         fixed = np.array([b.fixed for b in bodies])
+        options = self.options
+        previous = self._last[0] if self.keep_systems and self._last else None
+        # the meshes themselves, not their ids: the key keeps them alive, so a new mesh can never
+        # come back at a garbage-collected one's address and be taken for it
+        key = [(b.mesh, b.position.tobytes(), b.orientation.tobytes(), b.fixed) for b in bodies]
+        if previous is not None and key == self._last[3]:  # the very same bodies: keep the system
+            return previous, key, previous, length
+        geometry = SurfaceGeometry.from_bodies(bodies, options.quadrature_order, length, self.flow.wall,
+                                               options.contact_refinement, options.refine_fixed_at_wall,
+                                               options.density_order)
+        self._warn_unresolved(geometry, length)
+        description = BoundaryOperator(geometry, self.flow.wall, self.quadrature, "double_layer", options.dtype)
+        if self._mode is None:  # "auto" of a solver built without its unknowns: decided once, here
+            self._mode = choose_mode(description.size, options.dtype, self.device)
+        double_layer = description.discrete(self._mode, self.device, kept=self._kept, treecode=options.treecode,
+                                            point_sources=all_completion_poles(geometry))
+        return CompletedDoubleLayer(geometry, double_layer, fixed, previous), key, previous, length
+
+    def _right_side(self, system, bodies, forces, torques, length: float, background: bool, ambient_flow):
+        """(the scaled right-hand side, the velocity scale U0 (m/s), the force scale (N)) of one
+        solve of ``system`` (``solve``'s arguments)."""
+        fixed = system.fixed
         prescribed = np.array([np.concatenate([b.velocity, b.angular_velocity * length]) for b in bodies])
         slip = [b.surface_velocity for b in bodies] if background else [None] * len(bodies)
         options, flow = self.options, self.flow
@@ -165,28 +224,9 @@ class MobilitySolver:
                     max((np.abs(v).max() for v in slip if v is not None), default=0.0))
         speed = speed if speed > 0 else 1.0
         force_scale = flow.viscosity * speed * length  # N per scaled force unit
-
         if not background:
             prescribed[:] = 0.0
-        previous = self._last[0] if self.keep_systems and self._last else None
-        # the meshes themselves, not their ids: the key keeps them alive, so a new mesh can never
-        # come back at a garbage-collected one's address and be taken for it
-        key = [(b.mesh, b.position.tobytes(), b.orientation.tobytes(), b.fixed) for b in bodies]
-        if previous is not None and key == self._last[3]:  # the very same bodies: keep the system
-            system = previous
-            geometry, double_layer = system.geometry, system.double_layer
-        else:
-            geometry = SurfaceGeometry.from_bodies(bodies, options.quadrature_order, length, flow.wall,
-                                                   options.contact_refinement, options.refine_fixed_at_wall,
-                                                   options.density_order)
-            self._warn_unresolved(geometry, length)
-            description = BoundaryOperator(geometry, flow.wall, self.quadrature, "double_layer", options.dtype)
-            if self._mode is None:  # "auto" of a solver built without its unknowns: decided once, here
-                self._mode = choose_mode(description.size, options.dtype, self.device)
-            double_layer = description.discrete(self._mode, self.device, kept=self._kept, treecode=options.treecode,
-                                                point_sources=all_completion_poles(geometry))
-            system = CompletedDoubleLayer(geometry, double_layer, fixed, previous)
-
+        geometry = system.geometry
         xi = geometry.collocation
         ambient = np.zeros_like(xi)
         if background and ambient_flow is not None:
@@ -197,24 +237,21 @@ class MobilitySolver:
                       for p in np.flatnonzero(~fixed)}
         rhs = system.right_side(ambient, {p: loads for p, loads in free_loads.items() if np.any(loads)},
                                 prescribed, slip, speed)
+        return rhs, speed, force_scale
 
-        if initial_guess is not None and np.shape(initial_guess) != (system.size,):
-            raise ValueError(f"initial_guess must have shape ({system.size},) for this scene, got"
-                             f" {np.shape(initial_guess)} (the mesh or the bodies changed)")
-        if initial_guess is None and previous is not None and background:
-            # the previous solution is in the previous scaling: rescale the loads part with it
-            initial_guess = system.initial_guess(previous, self._last[1] * (self._last[2] / speed))
-        preconditioner = (system.preconditioner(previous, self.keep_systems, factor_every_body, self._factors)
-                          if options.precondition else None)
-        result = deflated_solve(system.linear_operator(), rhs, options, initial_guess=initial_guess,
-                                preconditioner=preconditioner, exact_preconditioner=system.preconditioner_is_exact())
-        x = result.solution
-        if background or self._last is None or system is not self._last[0]:
-            self._last = (system, x, speed, key)
+    def _preconditioning(self, system, previous, factor_every_body: bool) -> dict:
+        """``deflated_solve``'s preconditioner arguments for ``system`` (block Jacobi)."""
+        if not self.options.precondition:
+            return dict(preconditioner=None, exact_preconditioner=False)
+        return dict(preconditioner=system.preconditioner(previous, self.keep_systems, factor_every_body, self._factors),
+                    exact_preconditioner=system.preconditioner_is_exact())
 
-        return MobilitySolution(*self._motion_and_loads(bodies, system, x, forces, torques, speed, length, force_scale),
-                                result.iterations, result.residual, result.converged, double_layer.mode, x,
-                                double_layer.reused_bodies)
+    def _solution(self, bodies, system, result, forces, torques, speed, length, force_scale) -> MobilitySolution:
+        """The MobilitySolution of one GMRES ``result`` of ``system``."""
+        return MobilitySolution(*self._motion_and_loads(bodies, system, result.solution, forces, torques, speed,
+                                                        length, force_scale),
+                                result.iterations, result.residual, result.converged, system.double_layer.mode,
+                                result.solution, system.double_layer.reused_bodies)
 
     @staticmethod
     def _motion_and_loads(bodies, system, x, forces, torques, speed: float, length: float, force_scale: float):
@@ -270,7 +307,7 @@ class MobilitySolver:
                 " Squeeze-flow forces lose accuracy first, past about 1 % (README: stability map); a finer"
                 " mesh helps."
                 + (" In float32, GMRES stalls from about here: use dtype='float64'." if self.options.dtype == "float32" else ""),
-                ContactResolutionWarning, stacklevel=3)
+                ContactResolutionWarning, stacklevel=4)  # _warn_unresolved, _system, solve, the caller
 
 
 def solve_mobility(bodies, shear_rate: float = 0.0, viscosity: float = Flow.viscosity, wall: bool = True,
