@@ -40,12 +40,15 @@
    refinement between them), with the solver's store of block factors (``hydro/block_factors.py``:
    each cell's LU taken from the store when its shape and height were seen) and without, the two
    interleaved; wall time per snapshot and the store's hits;
+1f. batch: pair snapshots of two cells 12-13.5 um apart with the flow and the 12 loads solved
+   in one batched GMRES (``MobilitySolver.solve_loads``, the solver's own) and one by one,
+   interleaved; wall time, iterations and the difference between the two;
 2. cost per step: n cells rolling on stiff bonds (the state diagram's rolling point) for a
    short run from the same start, pairs, pairs with the coarse many-body remainder
    (``--remainder-cells``) and the whole system's snapshots (``--system-cells``), wall time and
    snapshots solved; the fitted exponent of the cost per step over n.
 
-    python benchmarks/many_cells.py [--parts accuracy resistance cutoff lattice reuse factors cost] [--runs RUN.h5 ...] [--quick]
+    python benchmarks/many_cells.py [--parts accuracy resistance cutoff lattice reuse factors batch cost] [--runs RUN.h5 ...] [--quick]
         [--cells N ...] [--system-cells N ...] [--remainder-cells N ...] [--cases KIND:N:UM ...]
         [--refinement R] [--device cuda:0]
 
@@ -374,6 +377,39 @@ def factor_store(device, k, count):
     return rows
 
 
+def batched_loads(device, k, count):
+    """Wall time of ``count`` pair snapshots of two cells 12-13.5 um apart (refined between them,
+    so no block repeats) with the flow and the 12 loads solved in one batched GMRES (the pairs'
+    own, ``MobilitySolver.solve_loads``) and one after the other (as before it), interleaved
+    offset by offset, and the largest difference between their grand mobilities."""
+    mesh = wb.mesh.sphere(A, k)
+    batched, sequential = (solves(mesh, 2, device, reuse_tolerance=2e-9, grand_mobility="pairs") for _ in range(2))
+    rows = []
+    for i in range(count):
+        bodies = [Body(mesh, position=(0.0, 0.0, REST)),
+                  Body(mesh, position=(12e-6 + 0.5e-6 * i, 0.3e-6, REST + 20e-9))]
+        t = time.perf_counter()
+        _, grand = batched._solved(bodies)
+        batched_s = time.perf_counter() - t
+        t = time.perf_counter()
+        solver = sequential.mobility
+        flow = solver.solve(bodies, check_placement_first=False, factor_every_body=True)
+        loads = sequential._body_loads(2)
+        one_by_one = [solver.solve(bodies, 1e-12 * f, 1e-12 * q, check_placement_first=False, background=False)
+                      for f, q in zip(*loads)]
+        sequential_s = time.perf_counter() - t
+        velocity = np.array([s.velocity for s in one_by_one]) / 1e-12
+        raw = batched._responses(bodies, *loads)  # the same system kept: its loads once more, unsymmetrised
+        rows.append(dict(k=k, distance_um=float(np.hypot(*bodies[1].position[:2])) * 1e6, batched_s=batched_s,
+                         one_by_one_s=sequential_s, ratio=sequential_s / batched_s,
+                         iterations_batched=grand.iterations, flow_iterations=flow.iterations,
+                         iterations_one_by_one=sum(s.iterations for s in one_by_one),
+                         difference=float(np.abs(raw.velocity - velocity).max() / np.abs(velocity).max())))
+        print_table([rows[-1]])
+    print(f"one by one over batched: {np.mean([r['ratio'] for r in rows]):.2f} times the time (mean)")
+    return rows
+
+
 def rolling_patch(n, spacing, mode, k=3, seed=1):
     """(model, state) of n rigid cells rolling on stiff bonds, released at the rest height in a
     line (n <= 3) or a square patch, with the snapshots of ``mode`` (MODES)."""
@@ -447,7 +483,7 @@ def cost_chart(rows, path):
 def main():
     parser = arguments(__doc__)
     parser.add_argument("--parts", nargs="+", default=["accuracy"],
-                        choices=["accuracy", "resistance", "cutoff", "lattice", "reuse", "factors", "cost"])
+                        choices=["accuracy", "resistance", "cutoff", "lattice", "reuse", "factors", "batch", "cost"])
     parser.add_argument("--runs", nargs="*", default=[], help="run files for --parts reuse")
     parser.add_argument("--k", type=int, default=2, help="sphere mesh subdivisions")
     parser.add_argument("--cells", nargs="*", type=int, default=[],
@@ -492,6 +528,9 @@ def main():
     if "factors" in args.parts:
         rows = factor_store(args.device, 2 if args.quick else 3, 3 if args.quick else 6)
         print(f"wrote {write_csv('many_cells_factors.csv', rows)}")
+    if "batch" in args.parts:
+        rows = batched_loads(args.device, 2 if args.quick else 3, 2 if args.quick else 4)
+        print(f"wrote {write_csv('many_cells_batch.csv', rows)}")
     if "cost" in args.parts:
         counts, system_counts, remainder_counts, end = (([1, 3], [3], [], 5e-4) if args.quick else
                                                         ([1, 3, 8, 16, 64], [3], [16], 2e-3))

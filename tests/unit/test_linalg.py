@@ -76,15 +76,17 @@ def test_a_column_that_does_not_converge_raises_with_its_figures(rng):
 def test_the_loads_solved_together_are_the_loads_solved_one_by_one():
     """MobilitySolver.solve_loads (one batched GMRES, the dense matrix applied to all loads at
     once) gives each load's motion as solve(background=False) does, to the GMRES tolerance: two
-    spheres near the wall, unit forces and torques on each."""
+    spheres near the wall, unit forces and torques on each; with the background among them, its
+    motion in the flow as solve(bodies) gives it."""
     s = wb.mesh.sphere(1.0, 2)
     bodies = [wb.Body(s, position=(0.0, 0.0, 1.3)), wb.Body(s, position=(2.4, 0.5, 1.6))]
     solver = wb.MobilitySolver(1.0, 1.0)
     forces, torques = np.zeros((12, 2, 3)), np.zeros((12, 2, 3))
     for k in range(12):
         (forces if k % 6 < 3 else torques)[k, k // 6, k % 3] = 1.0
-    solver.solve(bodies)
-    together = solver.solve_loads(bodies, forces, torques)
+    in_flow = solver.solve(bodies)
+    background, *together = wb.MobilitySolver(1.0, 1.0).solve_loads(bodies, forces, torques, with_background=True)
+    np.testing.assert_allclose(background.velocity, in_flow.velocity, rtol=0, atol=1e-7 * np.abs(in_flow.velocity).max())
     for f, t, batched in zip(forces, torques, together):
         alone = solver.solve(bodies, f, t, check_placement_first=False, background=False)
         for name in ("velocity", "angular_velocity"):

@@ -176,34 +176,42 @@ class HydrodynamicSolves:
         radii = self.model.outer_radii[self.free, None]
         return np.concatenate([force[self.free], torque[self.free] / radii], axis=1).ravel()
 
-    def _responses(self, bodies, load_force, load_torque) -> Responses:
-        solves = self.mobility.solve_loads(bodies, PROBE_FORCE * load_force, PROBE_FORCE * load_torque)
+    def _responses(self, bodies, load_force, load_torque, flow: bool = False):
+        """The Responses of the loads, all solved at once (``MobilitySolver.solve_loads``);
+        ``flow``: with the flow's Motion solved among them, as (Motion, Responses)."""
+        solves = self.mobility.solve_loads(bodies, PROBE_FORCE * load_force, PROBE_FORCE * load_torque,
+                                           factor_every_body=self.pairwise is not None, with_background=flow)
+        background = Motion.of(solves.pop(0)) if flow else None
         stack = [np.array([getattr(s, name) for s in solves]) / PROBE_FORCE
                  for name in ("velocity", "angular_velocity", "force", "torque")]
-        return Responses(*stack, load_force, load_torque, sum(s.iterations for s in solves),
-                         max(s.residual for s in solves))
+        responses = Responses(*stack, load_force, load_torque, sum(s.iterations for s in solves),
+                              max(s.residual for s in solves))
+        return (background, responses) if flow else responses
 
-    def _grand_mobility(self, bodies, radii=None, half_turn: bool = False) -> Responses:
+    def _grand_mobility(self, bodies, radii=None, half_turn: bool = False, flow: bool = False):
         """The "bodies" basis of the free bodies in ``bodies`` (outer ``radii``, default the
         model's), with their motion taken from the symmetrised grand mobility: the collocation
         discretisation is reciprocal only to its discretisation error (0.5 % in the
         translation-rotation coupling of a 24-element sphere), and a joint step whose rates and
         dissipation came from different halves would hold a cell at rest with a load that is not
         its holding load. ``half_turn``: two free bodies of one mesh that a half turn about the
-        vertical through their midpoint exchanges (``_half_turn_responses``)."""
+        vertical through their midpoint exchanges (``_half_turn_responses``). ``flow``: the flow's
+        Motion solved with the loads, as (Motion, Responses)."""
         radii = self.model.outer_radii if radii is None else radii
         free = [b for b, body in enumerate(bodies) if not body.fixed]
         loads = self._body_loads(len(bodies), free, radii)
-        r = self._half_turn_responses(bodies, *loads) if half_turn else self._responses(bodies, *loads)
+        solved = (self._half_turn_responses if half_turn else self._responses)(bodies, *loads, flow=flow)
+        background, r = solved if flow else (None, solved)
         q = r.quadratic()
         velocity, angular_velocity = r.velocity.copy(), r.angular_velocity.copy()
         for j, b in enumerate(free):
             velocity[:, b] = q[:, 6 * j:6 * j + 3]
             angular_velocity[:, b] = q[:, 6 * j + 3:6 * j + 6] / radii[b]
-        return Responses(velocity, angular_velocity, r.force, r.torque, r.load_force, r.load_torque,
-                         r.iterations, r.residual)
+        grand = Responses(velocity, angular_velocity, r.force, r.torque, r.load_force, r.load_torque,
+                          r.iterations, r.residual)
+        return (background, grand) if flow else grand
 
-    def _half_turn_responses(self, bodies, load_force, load_torque) -> Responses:
+    def _half_turn_responses(self, bodies, load_force, load_torque, flow: bool = False):
         """The Responses of the 12 basis loads of two free bodies of one mesh, at one height, that
         the half turn R = diag(-1, -1, 1) about the vertical through their midpoint maps onto each
         other (a sphere's mesh is symmetric under it, and so are the wall and its refinement):
@@ -212,10 +220,12 @@ class HydrodynamicSolves:
         solve (pairwise.py's pair snapshots; the test there holds it to the direct solve)."""
         turn = np.array([-1.0, -1.0, 1.0])
         signs = np.tile(turn, 2)[:, None, None]  # R e_i = turn_i e_i, forces and torques alike
-        half = self._responses(bodies, load_force[:6], load_torque[:6])
+        solved = self._responses(bodies, load_force[:6], load_torque[:6], flow=flow)
+        background, half = solved if flow else (None, solved)
         parts = [np.concatenate([a, signs * turn * a[:, ::-1]]) for a in (half.velocity, half.angular_velocity,
                                                                          half.force, half.torque)]
-        return Responses(*parts, load_force, load_torque, half.iterations, half.residual)
+        responses = Responses(*parts, load_force, load_torque, half.iterations, half.residual)
+        return (background, responses) if flow else responses
 
     def _body_loads(self, n, free=None, radii=None):
         """(force, torque) (6 f, n, 3) of the "bodies" basis of the ``free`` ones (default all) of
@@ -279,9 +289,9 @@ class HydrodynamicSolves:
     def _solved(self, bodies, radii=None, half_turn: bool = False):
         """A snapshot solved at ``bodies``: (flow Motion, grand mobility Responses); ``half_turn``
         as in ``_grand_mobility``."""
-        # the pairs' snapshots factor every block: 13 solves of one system (pairwise.py)
-        flow = self.mobility.solve(bodies, check_placement_first=False, factor_every_body=self.pairwise is not None)
-        return Motion.of(flow), self._grand_mobility(bodies, radii, half_turn)
+        # the flow and the loads in one batched GMRES (MobilitySolver.solve_loads); the pairs'
+        # snapshots factor every block: 13 solves of one system (pairwise.py)
+        return self._grand_mobility(bodies, radii, half_turn, flow=True)
 
     def _kept(self, key, snapped, solve, store=None):
         """The snapshot ``key`` from ``store`` (default the whole systems' and lone ones; the

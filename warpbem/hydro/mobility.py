@@ -166,22 +166,34 @@ class MobilitySolver:
             self._last = (system, x, speed, key)
         return self._solution(bodies, system, result, forces, torques, speed, length, force_scale)
 
-    def solve_loads(self, bodies, forces, torques, factor_every_body: bool = False) -> list[MobilitySolution]:
+    def solve_loads(self, bodies, forces, torques, factor_every_body: bool = False,
+                    with_background: bool = False) -> list[MobilitySolution]:
         """The motion under each load (k, n, 3) of ``forces`` and ``torques`` alone, as ``solve``
         with ``background=False`` gives it for each, all solved at once (``deflated.py``: one
         GMRES per load whose products take the k columns together, so the dense matrix is read
         once per iteration for all of them): the responses to a basis of loads (the grand
-        mobility, dynamics/hydrodynamics.py). The bodies' placement is not checked."""
+        mobility, dynamics/hydrodynamics.py). ``with_background``: the first solution is the
+        background's (the flow, no load; ``solve(bodies)``), solved with them and started from the
+        previous solve's solution as ``solve`` starts. The bodies' placement is not checked."""
         bodies = checked_bodies(bodies)
         loads = [(checked_loads("forces", f, bodies), checked_loads("torques", t, bodies))
                  for f, t in zip(forces, torques)]
+        if with_background:
+            loads.insert(0, (np.zeros((len(bodies), 3)), np.zeros((len(bodies), 3))))
         if not loads:
             return []
         system, key, previous, length = self._system(bodies)
-        parts = [self._right_side(system, bodies, f, t, length, False, None) for f, t in loads]
+        parts = [self._right_side(system, bodies, f, t, length, with_background and c == 0, None)
+                 for c, (f, t) in enumerate(loads)]
+        guesses = np.zeros((system.size, len(loads)))
+        if with_background and previous is not None:
+            guesses[:, 0] = system.initial_guess(previous, self._last[1] * (self._last[2] / parts[0][1]))
         results = deflated_solve(system.linear_operator(), np.column_stack([rhs for rhs, _, _ in parts]),
-                                 self.options, **self._preconditioning(system, previous, factor_every_body))
-        if self._last is None or system is not self._last[0]:
+                                 self.options, initial_guess=guesses,
+                                 **self._preconditioning(system, previous, factor_every_body))
+        if with_background:
+            self._last = (system, results[0].solution, parts[0][1], key)
+        elif self._last is None or system is not self._last[0]:
             self._last = (system, results[-1].solution, parts[-1][1], key)
         return [self._solution(bodies, system, result, f, t, speed, length, force_scale)
                 for result, (f, t), (_, speed, force_scale) in zip(results, loads, parts)]
