@@ -84,6 +84,18 @@ def test_far_cells_keep_their_background_loads_and_solves_of_loads_alone_give_th
     assert np.all(loads_alone.reused_bodies[far])
 
 
+def test_solves_of_several_loads_give_the_background_then_each_load_alone(scene_4x4):
+    """FrozenArraySolver.solve_loads, which the snapshots of bonded scenes call
+    (dynamics/hydrodynamics.py): the background's motion first, then each load's alone, as
+    solve gives them one by one."""
+    bodies, forces, unused = scene_4x4
+    split = FrozenArraySolver(solver(), cutoff=0.5)
+    background, alone = split.solve_loads(bodies, [forces], [np.zeros_like(forces)], with_background=True)
+    for got, expected in ((background, split.solve(bodies)), (alone, split.solve(bodies, forces=forces,
+                                                                                  background=False))):
+        np.testing.assert_allclose(got.velocity, expected.velocity, rtol=0, atol=1e-7 * np.abs(expected.velocity).max())
+
+
 @pytest.fixture(scope="module")
 def background_8x8():
     """The background flow of 8 x 8 adherent spheres: a tree with a far field."""

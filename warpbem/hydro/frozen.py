@@ -199,11 +199,13 @@ class FrozenArraySolver:
         return MobilitySolution(velocity, angular_velocity, force, torque, sol.iterations, sol.residual,
                                 sol.converged, sol.operator_mode, sol.solution_vector, reused)
 
-    def solve_loads(self, bodies, forces, torques, factor_every_body: bool = False) -> list[MobilitySolution]:
+    def solve_loads(self, bodies, forces, torques, factor_every_body: bool = False,
+                    with_background: bool = False) -> list[MobilitySolution]:
         """As ``MobilitySolver.solve_loads``, one load after the other (its near systems hold
         fixed bodies, whose responses the batched solve does not take)."""
-        return [self.solve(bodies, f, t, check_placement_first=False, background=False)
-                for f, t in zip(forces, torques)]
+        background = [self.solve(bodies, check_placement_first=False)] if with_background else []
+        return background + [self.solve(bodies, f, t, check_placement_first=False, background=False)
+                             for f, t in zip(forces, torques)]
 
     def _set_up(self, bodies, adherent):
         """The background of the adherent cells, solved at the first call; later calls must
