@@ -66,6 +66,26 @@ def test_interaction_lattice_equal_to_the_fine_one_is_the_full_snapshot():
     assert hydro.snapshots_solved == 1
 
 
+@pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
+def test_free_cells_moved_together_along_the_wall_keep_their_snapshot():
+    """Free cells above the wall in shear (u = gdot z e_x) are invariant under translation along
+    it, so the lateral lattice is relative to the first cell: two cells moved together by 37.3 um
+    along the flow and -5.77 um across it (no multiple of the 1 um lattice) take the snapshot
+    already solved, bit for bit, and it is the exact solve of the cells' snapped offset."""
+    hydro = solves(FINE)
+    offset = np.array([6 * A, 0.1e-6, 0.0])
+    first = np.array([0.2e-6, 0.0, HEIGHT])
+    snapshot = motion(hydro, *hydro._snapshot([Body(MESH, position=first), Body(MESH, position=first + offset)]))
+    moved = first + np.array([37.3e-6, -5.77e-6, 0.0])
+    again = motion(hydro, *hydro._snapshot([Body(MESH, position=moved), Body(MESH, position=moved + offset)]))
+    assert hydro.snapshots_solved == 1
+    for a, b in zip(again, snapshot):
+        np.testing.assert_array_equal(a, b)
+    snapped = [Body(MESH, position=(0.0, 0.0, HEIGHT)), Body(MESH, position=(6 * A, 0.0, HEIGHT))]
+    np.testing.assert_allclose(np.concatenate([m.ravel() for m in snapshot]),
+                               np.concatenate([m.ravel() for m in exact(hydro, snapped)]), rtol=0, atol=1e-12 * 1e6)
+
+
 def test_interaction_lattice_finer_than_the_fine_one_is_refused():
     with pytest.raises(ValueError, match=r"reuse_interaction: 1e-09 is outside the allowed range \[2e-09, 1e-06\] \(>= reuse_tolerance > 0\)"):
         SolverOptions(reuse_tolerance=2e-9, reuse_interaction=1e-9)
