@@ -69,14 +69,15 @@ def test_interaction_lattice_equal_to_the_fine_one_is_the_full_snapshot():
 @pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
 def test_free_cells_moved_together_along_the_wall_keep_their_snapshot():
     """Free cells above the wall in shear (u = gdot z e_x) are invariant under translation along
-    it, so the lateral lattice is relative to the first cell: two cells moved together by 37.3 um
-    along the flow and -5.77 um across it (no multiple of the 1 um lattice) take the snapshot
-    already solved, bit for bit, and it is the exact solve of the cells' snapped offset."""
+    it, so their lattice points are keyed shifted by the first cell's: two cells moved together by
+    37.1 um along the flow and -5.77 um across it (no multiple of the 1 um lattice; each cell's
+    nearest lattice point moves by 37 and -6 um alike) take the snapshot already solved, bit for
+    bit, and it is the exact solve of the cells' snapped offset."""
     hydro = solves(FINE)
     offset = np.array([6 * A, 0.1e-6, 0.0])
     first = np.array([0.2e-6, 0.0, HEIGHT])
     snapshot = motion(hydro, *hydro._snapshot([Body(MESH, position=first), Body(MESH, position=first + offset)]))
-    moved = first + np.array([37.3e-6, -5.77e-6, 0.0])
+    moved = first + np.array([37.1e-6, -5.77e-6, 0.0])
     again = motion(hydro, *hydro._snapshot([Body(MESH, position=moved), Body(MESH, position=moved + offset)]))
     assert hydro.snapshots_solved == 1
     for a, b in zip(again, snapshot):

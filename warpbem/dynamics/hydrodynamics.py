@@ -15,9 +15,9 @@ mobility does not depend on it). A lone body above the wall in shear (u = gdot z
 invariant under translation along the wall, so its snapshots are keyed by height alone and
 computed at x = y = 0. With several bodies the snapshot is split: the whole system's (the
 interaction snapshot) on a coarser lattice, heights to ``reuse_interaction`` (default 10 d,
-orientations likewise) and lateral positions to ``reuse_lateral`` (default 50 d; relative to
-the first body's when all are free, by the same invariance: a train rolling as a whole keeps its
-snapshot; absolute when fixed bodies pin the frame), and each
+orientations likewise) and lateral positions to ``reuse_lateral`` (default 50 d; with all
+bodies free, the lattice points shifted by the first body's, by the same invariance, so that a
+configuration recurring shifted by whole lattice steps finds its snapshot), and each
 free body's self part moved from its coarse height to its fine one by the difference of its
 lone snapshots there, M(X) ~ M(X*) + sum_i [M_i(h_i) - M_i(h_i*)] on body i's own block. A
 cell's mobility changes with its height over the gap to the wall (0.2 um when rolling), but
@@ -315,21 +315,25 @@ class HydrodynamicSolves:
 
     def _snapped(self, bodies, spacing, indices=None):
         """(key, bodies) of ``bodies`` (model bodies ``indices``) on the lattice of heights
-        ``spacing``, orientations spacing / outer radius and lateral positions reuse_lateral:
-        relative to the first body's when every body is free (free bodies above the wall in
-        shear are invariant under translation along it, so a train that rolls as a whole keeps
-        its snapshot), absolute when fixed bodies pin the frame."""
+        ``spacing``, orientations spacing / outer radius and lateral positions reuse_lateral.
+        When every body is free, the lattice points are shifted by the first body's lateral one
+        (free bodies above the wall in shear are invariant under translation along it): the
+        snapshot is the same, and configurations that recur shifted by whole lattice steps, as a
+        train rolling as a whole, find it again. Each point is still the body's own nearest, so a
+        single moving cell changes the key as often as before (rounding the offsets from the first
+        body instead would change it when any offset crosses a line: twice as often for a cell
+        moving past two resting ones). Fixed bodies pin the frame."""
         indices = range(len(bodies)) if indices is None else indices
         lattice = np.array([self.lateral, self.lateral, spacing])
-        origin = np.zeros(3)
+        shift = np.zeros(3)
         if not any(b.fixed for b in bodies):
-            origin[:2] = bodies[0].position[:2]
+            shift[:2] = np.round(bodies[0].position[:2] / self.lateral)
         key, snapped = [], []
         for i, b in zip(indices, bodies):
             if b.fixed:
                 snapped.append(b)
                 continue
-            cell = np.round((b.position - origin) / lattice)
+            cell = np.round(b.position / lattice) - shift
             entry = tuple(cell)
             orientation = np.array([1.0, 0.0, 0.0, 0.0])
             if not self.spherical[i]:
