@@ -42,7 +42,8 @@
    interleaved; wall time per snapshot and the store's hits;
 1f. batch: pair snapshots of two cells 12-13.5 um apart with the flow and the 12 loads solved
    in one batched GMRES (``MobilitySolver.solve_loads``, the solver's own) and one by one,
-   interleaved; wall time, iterations and the difference between the two;
+   interleaved; wall time, iterations and the difference between the two; and the coarse whole
+   system of the many-body remainder (4-64 cells) batched and one by one;
 2. cost per step: n cells rolling on stiff bonds (the state diagram's rolling point) for a
    short run from the same start, pairs, pairs with the coarse many-body remainder
    (``--remainder-cells``) and the whole system's snapshots (``--system-cells``), wall time and
@@ -410,6 +411,32 @@ def batched_loads(device, k, count):
     return rows
 
 
+def batched_coarse_systems(device, counts):
+    """Wall time of the coarse whole system's snapshot (the many-body remainder's: k = 2 cells of
+    24 elements, patches 25 um apart) with its 6 n + 1 solves batched and one by one."""
+    mesh = wb.mesh.sphere(A, COARSE_K)
+    warm_up = [Body(mesh, position=p) for p in arrangement("patch", 4, 25e-6)]
+    solves(mesh, 4, device, contact_refinement=0.0)._solved(warm_up)  # the process's first solves load kernels
+    rows = []
+    for n in counts:
+        bodies = [Body(mesh, position=p) for p in arrangement("patch", n, 25e-6)]
+        batched, sequential = (solves(mesh, n, device, contact_refinement=0.0) for _ in range(2))
+        t = time.perf_counter()
+        batched._solved(bodies)
+        batched_s = time.perf_counter() - t
+        t = time.perf_counter()
+        sequential.mobility.solve(bodies, check_placement_first=False, factor_every_body=True)
+        for f, q in zip(*sequential._body_loads(n)):
+            sequential.mobility.solve(bodies, 1e-12 * f, 1e-12 * q, check_placement_first=False, background=False)
+        rows.append(dict(cells=n, unknowns=sequential.mobility.last_system[0].size, batched_s=batched_s,
+                         one_by_one_s=time.perf_counter() - t))
+        print_table([rows[-1]])
+    for key in ("batched_s", "one_by_one_s"):
+        slope, _ = exponent(rows, key)
+        print(f"{key}: n^{slope:.2f}")
+    return rows
+
+
 def rolling_patch(n, spacing, mode, k=3, seed=1):
     """(model, state) of n rigid cells rolling on stiff bonds, released at the rest height in a
     line (n <= 3) or a square patch, with the snapshots of ``mode`` (MODES)."""
@@ -531,6 +558,8 @@ def main():
     if "batch" in args.parts:
         rows = batched_loads(args.device, 2 if args.quick else 3, 2 if args.quick else 4)
         print(f"wrote {write_csv('many_cells_batch.csv', rows)}")
+        rows = batched_coarse_systems(args.device, [4, 9] if args.quick else [4, 9, 16, 36, 64])
+        print(f"wrote {write_csv('many_cells_batch_coarse.csv', rows)}")
     if "cost" in args.parts:
         counts, system_counts, remainder_counts, end = (([1, 3], [3], [], 5e-4) if args.quick else
                                                         ([1, 3, 8, 16, 64], [3], [16], 2e-3))
