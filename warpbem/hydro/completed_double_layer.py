@@ -229,12 +229,11 @@ class CompletedDoubleLayer:
         if self.treecode:
             return deflated_operator(lambda y, c: self.double_layer.apply(y, self.pole_forces(self.held_loads(c))),
                                      self.rigid, ~self.fixed, non_rigid_part=True)
-        if not self.fixed.any():  # no fixed body's response: the dense matrix on the CPU takes blocks of columns
-            blocks = self.double_layer.mode == "dense" and self.double_layer.device.is_cpu
-            return deflated_operator(lambda y, c: self.double_layer.apply(y), self.rigid, ~self.fixed,
-                                     non_rigid_part=True, blocks=blocks)
+        response = (lambda c: self.fixed_columns @ self.held_loads(c)) if self.fixed.any() else None
+        # without a fixed body's response, the dense matrix on the CPU takes blocks of columns
+        blocks = response is None and self.double_layer.mode == "dense" and self.double_layer.device.is_cpu
         return deflated_operator(lambda y, c: self.double_layer.apply(y), self.rigid, ~self.fixed,
-                                 non_rigid_part=True, response=lambda c: self.fixed_columns @ self.held_loads(c))
+                                 non_rigid_part=True, response=response, blocks=blocks)
 
     def body_block(self, body: int, matrix: np.ndarray) -> np.ndarray:
         """The diagonal block of ``matvec`` for one body's density, from that body's own block
