@@ -80,6 +80,8 @@ def deflated_operator(apply, modes: RigidModes, shifted, non_rigid_part: bool, r
     size = len(modes.weights)
 
     def matvec(x):
+        if not blocks and x.ndim == 2:  # LinearOperator's own matmat passes single (N, 1) columns
+            x = x[:, 0]
         c = np.array([modes.coefficients(p, x) for p in range(len(modes.ranges))])
         rigid = np.zeros_like(x)
         for p, rows in enumerate(modes.ranges):
