@@ -7,7 +7,7 @@ files, for scenes/README.md:
     warpbem sweep scenes/fig4_07_11_compliant_rolling.toml --output-dir results/compliant_rolling
     warpbem run scenes/rolling_cells.toml --output results/rolling_cells.h5
     warpbem sweep scenes/state_diagram.toml --vary adhesion.off_rate=1.0 \
-        --vary adhesion.reactive_compliance=0.6e-10 --vary adhesion.seed=2,3,4,5 \
+        --vary adhesion.reactive_compliance=0.6e-10 --vary adhesion.seed=1,2,3,4,5 \
         --output-dir results/rolling_alone
     warpbem run scenes/free_meets_rolling.toml --output results/free_meets_rolling.h5
     warpbem sweep scenes/recruitment_capture.toml --output-dir results/recruitment_capture
@@ -237,7 +237,7 @@ def several_rolling() -> list[dict]:
         return []
     with open_result(trio) as f:
         window = float(f["time"][-1])
-    lone = [ROOT / "results" / "state_diagram" / "point006.h5"] + sorted((ROOT / "results" / "rolling_alone").glob("point*.h5"))
+    lone = sorted((ROOT / "results" / "rolling_alone").glob("point*.h5"))  # seeds 1-5
     rows = release(trio, "three cells 12 um apart", window)
     for path in lone:
         if path.exists():

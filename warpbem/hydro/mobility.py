@@ -157,8 +157,7 @@ class MobilitySolver:
             raise ValueError(f"initial_guess must have shape ({system.size},) for this scene, got"
                              f" {np.shape(initial_guess)} (the mesh or the bodies changed)")
         if initial_guess is None and previous is not None and background:
-            # the previous solution is in the previous scaling: rescale the loads part with it
-            initial_guess = system.initial_guess(previous, self._last[1] * (self._last[2] / speed))
+            initial_guess = self._warm_start(system, previous, speed)
         result = deflated_solve(system.linear_operator(), rhs, self.options, initial_guess=initial_guess,
                                 **self._preconditioning(system, previous, factor_every_body))
         x = result.solution
@@ -187,7 +186,7 @@ class MobilitySolver:
                  for c, (f, t) in enumerate(loads)]
         guesses = np.zeros((system.size, len(loads)))
         if with_background and previous is not None:
-            guesses[:, 0] = system.initial_guess(previous, self._last[1] * (self._last[2] / parts[0][1]))
+            guesses[:, 0] = self._warm_start(system, previous, parts[0][1])
         results = deflated_solve(system.linear_operator(), np.column_stack([rhs for rhs, _, _ in parts]),
                                  self.options, initial_guess=guesses,
                                  **self._preconditioning(system, previous, factor_every_body))
@@ -197,6 +196,11 @@ class MobilitySolver:
             self._last = (system, results[-1].solution, parts[-1][1], key)
         return [self._solution(bodies, system, result, f, t, speed, length, force_scale)
                 for result, (f, t), (_, speed, force_scale) in zip(results, loads, parts)]
+
+    def _warm_start(self, system, previous, speed: float) -> np.ndarray:
+        """The background's GMRES start from the previous solve's solution, which is in the previous
+        scaling: its loads part is rescaled by the two speed scales."""
+        return system.initial_guess(previous, self._last[1] * (self._last[2] / speed))
 
     def _system(self, bodies):
         """(the CompletedDoubleLayer system of ``bodies``, their key, the previous system or None,
