@@ -61,7 +61,7 @@ def chart(traces: dict, out: Path) -> Path:
     plt = _pyplot()
     fig, (side, count) = plt.subplots(1, 2, figsize=(11, 4))
     for i, (run, (t, x, gap, bonds, glance)) in enumerate(sorted(traces.items(), key=lambda item: item[1][4])):
-        colour, label = f"C{i}", f"offset {glance * 1e6:.1f} um"
+        colour, label = f"C{i}", f"offset {glance * 1e6:.1f} um, start gap {gap[0] * 1e9:.0f} nm"
         side.plot(x * 1e6, gap * 1e9, color=colour, label=label)
         count.plot(t * 1e3, bonds, color=colour, label=label)
         bound = np.flatnonzero(bonds > 0)

@@ -101,5 +101,6 @@ def run(scene_path, output, overrides=(), device="cpu", resume=False, progress=p
                 rate = (state.time - t0) / elapsed
                 eta = (scene.end - state.time) / rate if rate > 0 else float("inf")
                 progress(f"t = {state.time:.6g} / {scene.end:g} s  steps {state.steps}  {steps / elapsed:.2f} steps/s"
-                         f"  dt {frame.dt:.2e} s  GMRES {frame.gmres_iterations} ({sim.mobility.operator_description})  ETA {eta:.0f} s")
+                         f"  dt {frame.dt:.2e} s  GMRES {frame.gmres_iterations} ({sim.mobility.operator_description})"
+                         f"  snapshots {sim.hydro.snapshots_solved}  ETA {eta:.0f} s")
     return state
