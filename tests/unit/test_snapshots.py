@@ -87,6 +87,29 @@ def test_free_cells_moved_together_along_the_wall_keep_their_snapshot():
                                np.concatenate([m.ravel() for m in exact(hydro, snapped)]), rtol=0, atol=1e-12 * 1e6)
 
 
+def test_near_contact_the_lateral_lattice_is_halved_until_no_gap_moves_by_more_than_half_of_it():
+    """Two cells 0.5 um apart (surface to surface) on the 1 um lattice: their nearest lattice
+    points would set them 1.0 um apart, twice the gap, so the snapshot takes the lattice halved
+    once (0.5 um), where the snapped gap is the gap; 2 um apart the 1 um lattice's 0.4 um
+    shift is within half the gap and the key is the lattice's own (hydrodynamics.GAP_SHARE)."""
+    hydro = solves(FINE)
+
+    def snapped_gap(gap):
+        bodies = [Body(MESH, position=(0.4e-6, 0.0, HEIGHT)), Body(MESH, position=(0.4e-6 + 2 * A + gap, 0.0, HEIGHT))]
+        key, snapped = hydro._snapped_apart(bodies)
+        return key, np.linalg.norm(snapped[1].position - snapped[0].position) - 2 * A
+
+    key, gap = snapped_gap(0.5e-6)
+    assert key[-1] == ("halved", 1) and gap == pytest.approx(0.5e-6, abs=1e-12)
+    plain = hydro._snapped([Body(MESH, position=(0.4e-6, 0.0, HEIGHT)),
+                            Body(MESH, position=(0.4e-6 + 2 * A + 0.5e-6, 0.0, HEIGHT))], FINE)
+    assert np.linalg.norm(plain[1][1].position - plain[1][0].position) - 2 * A == pytest.approx(1.0e-6, abs=1e-12)
+    key, gap = snapped_gap(2.0e-6)
+    assert key == hydro._snapped([Body(MESH, position=(0.4e-6, 0.0, HEIGHT)),
+                                  Body(MESH, position=(0.4e-6 + 2 * A + 2e-6, 0.0, HEIGHT))], FINE)[0]
+    assert abs(gap - 2.0e-6) <= 0.5 * 2.0e-6
+
+
 def test_interaction_lattice_finer_than_the_fine_one_is_refused():
     with pytest.raises(ValueError, match=r"reuse_interaction: 1e-09 is outside the allowed range \[2e-09, 1e-06\] \(>= reuse_tolerance > 0\)"):
         SolverOptions(reuse_tolerance=2e-9, reuse_interaction=1e-9)

@@ -29,8 +29,10 @@ coarse snapshot alone errs by 7e-3 (benchmarks/adhesion.py, 2c). The background 
 explicit loads and the stiff forces follow from a snapshot by linearity, so a step costs no
 solve while the cells stay near a snapped configuration already seen; the error is first
 order in the lattice spacings (charted by ``benchmarks/adhesion.py``). The evaluation stays a
-pure function of the state (resumed runs reproduce uninterrupted ones). A snapped
-configuration that is not a valid placement (a gap below the spacing) is solved exactly.
+pure function of the state (resumed runs reproduce uninterrupted ones). Near contact the
+lateral lattice is halved for a snapshot until no gap between two bodies moves by more than half
+of it (GAP_SHARE); a snapped configuration that still moves one more, or is not a valid
+placement, is solved exactly.
 """
 
 from __future__ import annotations
@@ -51,6 +53,15 @@ MAX_SNAPSHOTS = 256
 # a patch of cells rolling apart asks for a few per pair, so many more are kept than of the
 # whole system (64 cells: 2.4 MB each)
 MAX_PAIR_SNAPSHOTS = 65536
+# a whole system's snapped configuration may move the gap between two bodies by at most this share
+# of it; where the lateral lattice would move it more, the lattice is halved for that snapshot (up
+# to LATTICE_HALVINGS times), and beyond that the state is solved exactly. Without the rule a 1 um
+# lattice put a free cell passing 0.4 um from a rolling one 6 nm from it: refined for that gap,
+# the snapshot's matrix took 8 GB and the pass stalled (scenes/rolling_capture.toml, y_7_5), and
+# its coupling was not the state's. A shift of half the gap moves the coupling of two 5 um cells
+# 2 um apart by about 4 % (benchmarks/adhesion.py 2b: linear, 0.77 % per 200 nm at 12 um)
+GAP_SHARE = 0.5
+LATTICE_HALVINGS = 6
 
 
 @dataclass(frozen=True)
@@ -257,7 +268,7 @@ class HydrodynamicSolves:
             loads = self._body_loads(len(bodies))
             return (Motion(velocity, angular, zeros, zeros, iterations, residual),
                     Responses(basis_velocity, basis_angular, *loads, *loads, iterations, residual))
-        key, snapped = self._snapped(bodies, self.interaction)
+        key, snapped = self._snapped_apart(bodies)
         flow, grand = self._kept(key, snapped, self._solved)
         if self.interaction == self.tolerance:
             return flow, grand
@@ -317,7 +328,29 @@ class HydrodynamicSolves:
             store.popitem(last=False)
         return snapshot
 
-    def _snapped(self, bodies, spacing, indices=None):
+    def _snapped_apart(self, bodies):
+        """(key, bodies) of the whole system's snapshot of ``bodies`` (every model body): on the
+        lateral lattice, halved (the halvings then in the key) until no gap between two bodies
+        moves by more than GAP_SHARE of it; TooClose past LATTICE_HALVINGS. The gaps are those of
+        the bodies' outer spheres (exact for spheres); pairs whose outer spheres overlap (a cell
+        beside a non-spherical adherent one) are left to the placement check."""
+        first, second = np.triu_indices(len(bodies), 1)
+        radii = self.model.outer_radii[first] + self.model.outer_radii[second]
+
+        def gaps(placed):
+            centres = np.array([b.position for b in placed])
+            return np.linalg.norm(centres[first] - centres[second], axis=1) - radii
+
+        actual = gaps(bodies)
+        judged = actual > 0
+        for halvings in range(LATTICE_HALVINGS + 1):
+            key, snapped = self._snapped(bodies, self.interaction, lateral=self.lateral / 2**halvings)
+            moved = np.abs(gaps(snapped) - actual)[judged]
+            if np.all(moved <= GAP_SHARE * actual[judged]):
+                return (key + (("halved", halvings),) if halvings else key), snapped
+        raise TooClose
+
+    def _snapped(self, bodies, spacing, indices=None, lateral=None):
         """(key, bodies) of ``bodies`` (model bodies ``indices``) on the lattice of heights
         ``spacing``, orientations spacing / outer radius and lateral positions reuse_lateral.
         When every body is free, the lattice points are shifted by the first body's lateral one
@@ -326,12 +359,14 @@ class HydrodynamicSolves:
         train rolling as a whole, find it again. Each point is still the body's own nearest, so a
         single moving cell changes the key as often as before (rounding the offsets from the first
         body instead would change it when any offset crosses a line: twice as often for a cell
-        moving past two resting ones). Fixed bodies pin the frame."""
+        moving past two resting ones). Fixed bodies pin the frame. ``lateral``: the lateral
+        spacing, default reuse_lateral."""
         indices = range(len(bodies)) if indices is None else indices
-        lattice = np.array([self.lateral, self.lateral, spacing])
+        lateral = self.lateral if lateral is None else lateral
+        lattice = np.array([lateral, lateral, spacing])
         shift = np.zeros(3)
         if not any(b.fixed for b in bodies):
-            shift[:2] = np.round(bodies[0].position[:2] / self.lateral)
+            shift[:2] = np.round(bodies[0].position[:2] / lateral)
         key, snapped = [], []
         for i, b in zip(indices, bodies):
             if b.fixed:
