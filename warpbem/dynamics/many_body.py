@@ -24,11 +24,12 @@ positions snapped to ``many_body_lateral`` (1 um: moving each of nine cells at r
 0.5 um added 3e-5 / 2e-4 to the error) and their heights rounded up to HEIGHT_LATTICE, keyed
 relative to the first cell (translation along the wall), so it is a function of the state alone
 (resumed runs repeat uninterrupted ones). Its cost is the coarse whole system's, 6 n + 1 solves
-of 72 n unknowns (0.6 s for 16 cells, growing as n^1.8 from 4 to 16), and the coarse pairs'
+of 72 n unknowns in one batched GMRES (0.56 s for 16 cells, 8.0 s for 64, growing as n^1.66 from
+4 to 64; one after the other 0.77 and 25.7 s: ``benchmarks/many_cells.py --parts batch``), and the coarse pairs'
 snapshots at the snapped offsets, which the cells' lattice makes recur. A patch that rolls as a
 whole keeps its remainder: 0.1 s of the 4 x 4 patch took 14 min 26 s with it, against 15 min 50 s
 on the pairs alone (README "Many adhesive cells"). What it does not reach: linear cost (the
-coarse whole system grows as n^1.8; a far field at coarse resolution would be needed) and close
+coarse whole system grows as n^1.66; a far field at coarse resolution would be needed) and close
 trains (4.2e-3 of the flow's motion at 2 um between the surfaces).
 """
 
