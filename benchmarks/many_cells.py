@@ -47,9 +47,12 @@
 2. cost per step: n cells rolling on stiff bonds (the state diagram's rolling point) for a
    short run from the same start, pairs, pairs with the coarse many-body remainder
    (``--remainder-cells``) and the whole system's snapshots (``--system-cells``), wall time and
-   snapshots solved; the fitted exponent of the cost per step over n.
+   snapshots solved; the fitted exponent of the cost per step over n;
+2b. implicit: the same on pairs (``--cells``, default 16 64) with the implicit step's Newton
+   systems solved by Cholesky (``implicit.solve_semidefinite``) and by NumPy's least squares
+   (before it), interleaved cell count by cell count.
 
-    python benchmarks/many_cells.py [--parts accuracy resistance cutoff lattice reuse factors batch cost] [--runs RUN.h5 ...] [--quick]
+    python benchmarks/many_cells.py [--parts accuracy resistance cutoff lattice reuse factors batch cost implicit] [--runs RUN.h5 ...] [--quick]
         [--cells N ...] [--system-cells N ...] [--remainder-cells N ...] [--cases KIND:N:UM ...]
         [--refinement R] [--device cuda:0]
 
@@ -63,11 +66,13 @@ import json
 import resource
 import time
 import warnings
+from unittest import mock
 
 import numpy as np
 
 import warpbem as wb
 from common import arguments, output as output_path, print_table, pyplot, save_chart, write_csv
+from warpbem.dynamics import implicit
 from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion
 from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy, build_solver
 from warpbem.dynamics.pairwise import lateral_spacing
@@ -488,6 +493,18 @@ def cost(device, counts_by_mode, spacing, end):
     return rows
 
 
+def implicit_solvers(device, counts, end):
+    """``cost`` on pairs for each of ``counts``, the implicit step's Newton systems solved by
+    Cholesky and by NumPy's least squares (an SVD, as before), the two interleaved."""
+    least_squares = lambda matrix, rhs: np.linalg.lstsq(matrix, rhs, rcond=1e-14)[0]  # noqa: E731
+    rows = []
+    for n in counts:
+        for name, solver in (("cholesky", implicit.solve_semidefinite), ("least squares", least_squares)):
+            with mock.patch.object(implicit, "solve_semidefinite", solver):
+                rows += [dict(implicit=name, **row) for row in cost(device, {"pairs": [n]}, 25e-6, end)]
+    return rows
+
+
 def exponent(rows, key):
     """The fitted exponent of ``key`` against the cells, and the fit's prefactor."""
     n = np.array([r["cells"] for r in rows], float)
@@ -510,7 +527,8 @@ def cost_chart(rows, path):
 def main():
     parser = arguments(__doc__)
     parser.add_argument("--parts", nargs="+", default=["accuracy"],
-                        choices=["accuracy", "resistance", "cutoff", "lattice", "reuse", "factors", "batch", "cost"])
+                        choices=["accuracy", "resistance", "cutoff", "lattice", "reuse", "factors", "batch", "cost",
+                                 "implicit"])
     parser.add_argument("--runs", nargs="*", default=[], help="run files for --parts reuse")
     parser.add_argument("--k", type=int, default=2, help="sphere mesh subdivisions")
     parser.add_argument("--cells", nargs="*", type=int, default=[],
@@ -560,6 +578,13 @@ def main():
         print(f"wrote {write_csv('many_cells_batch.csv', rows)}")
         rows = batched_coarse_systems(args.device, [4, 9] if args.quick else [4, 9, 16, 36, 64])
         print(f"wrote {write_csv('many_cells_batch_coarse.csv', rows)}")
+    if "implicit" in args.parts:
+        rows = implicit_solvers(args.device, args.cells or ([3, 8] if args.quick else [16, 64]),
+                                5e-4 if args.quick else 2e-3)
+        for name in ("cholesky", "least squares"):
+            slope, _ = exponent([r for r in rows if r["implicit"] == name], "step_s")
+            print(f"{name}: a step without new snapshots costs n^{slope:.2f}")
+        print(f"wrote {write_csv('many_cells_implicit.csv', rows)}")
     if "cost" in args.parts:
         counts, system_counts, remainder_counts, end = (([1, 3], [3], [], 5e-4) if args.quick else
                                                         ([1, 3, 8, 16, 64], [3], [16], 2e-3))
