@@ -99,13 +99,16 @@ class Responses:
 
     def combine(self, z):
         """(U, Omega, F, T) of the loads sum_k z_k (load k), z in N."""
-        return tuple(np.einsum("k,kbi->bi", z, a) for a in (self.velocity, self.angular_velocity,
-                                                            self.force, self.torque))
+        return tuple(np.tensordot(z, a, axes=1) for a in (self.velocity, self.angular_velocity,
+                                                          self.force, self.torque))
 
     def quadratic(self) -> np.ndarray:
-        """Q_kl = (load k) . (motion l), symmetrised (reciprocity; removes the GMRES noise)."""
-        q = (np.einsum("kbi,lbi->kl", self.load_force, self.velocity)
-             + np.einsum("kbi,lbi->kl", self.load_torque, self.angular_velocity))
+        """Q_kl = (load k) . (motion l), symmetrised (reciprocity; removes the GMRES noise).
+        As products of (p, 3 n) matrices (BLAS): np.einsum's loop took 15 against 1.5 ms for the
+        384 loads of 64 cells (a script of this session), once per step."""
+        p = len(self.load_force)
+        q = (self.load_force.reshape(p, -1) @ self.velocity.reshape(p, -1).T
+             + self.load_torque.reshape(p, -1) @ self.angular_velocity.reshape(p, -1).T)
         return 0.5 * (q + q.T)
 
 
