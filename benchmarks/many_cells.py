@@ -52,7 +52,8 @@
    systems solved by Cholesky (``implicit.solve_semidefinite``) and by NumPy's least squares
    (before it), interleaved cell count by cell count.
 
-    python benchmarks/many_cells.py [--parts accuracy resistance cutoff lattice reuse factors batch cost implicit] [--runs RUN.h5 ...] [--quick]
+    python benchmarks/many_cells.py [--parts accuracy resistance cutoff lattice reuse factors batch cost implicit]
+        [--runs RUN.h5 ...] [--quick]
         [--cells N ...] [--system-cells N ...] [--remainder-cells N ...] [--cases KIND:N:UM ...]
         [--refinement R] [--device cuda:0]
 
