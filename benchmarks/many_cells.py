@@ -48,9 +48,10 @@
    short run from the same start, pairs, pairs with the coarse many-body remainder
    (``--remainder-cells``) and the whole system's snapshots (``--system-cells``), wall time and
    snapshots solved; the fitted exponent of the cost per step over n;
-2b. implicit: the same on pairs (``--cells``, default 16 64) with the implicit step's Newton
-   systems solved by Cholesky (``implicit.solve_semidefinite``) and by NumPy's least squares
-   (before it), interleaved cell count by cell count.
+2b. implicit: the same on pairs (``--cells``, default 16 64; cells of ``--k`` subdivisions) with
+   the implicit step's Newton step solved without forming its matrix (``implicit.MobilityResponse``:
+   GMRES on (I + dt A Q) s = b, products O(p^2)) and from the matrix formed and factored by
+   Cholesky (O(p^3), before it), interleaved cell count by cell count.
 
     python benchmarks/many_cells.py [--parts accuracy resistance cutoff lattice reuse factors batch cost implicit]
         [--runs RUN.h5 ...] [--quick]
@@ -63,6 +64,7 @@ machine's CPU side by side (part 2).
 Writes results/bench/many_cells_*.csv and many_cells.png.
 """
 
+import contextlib
 import json
 import resource
 import time
@@ -463,7 +465,7 @@ def solved_snapshots(hydro):
     return hydro.snapshots_solved + (remainder.solved if remainder is not None else 0)
 
 
-def cost(device, counts_by_mode, spacing, end):
+def cost(device, counts_by_mode, spacing, end, k=3):
     """Wall time of n rolling cells over ``end`` s, for the cell counts of each mode (MODES) side
     by side: the median step that solved no new snapshot (the cost that must grow linearly), the
     snapshots solved (remainders included) and the time they took (the steps' excess over that
@@ -471,7 +473,7 @@ def cost(device, counts_by_mode, spacing, end):
     rows = []
     for mode, ns in counts_by_mode.items():
         for n in ns:
-            model, state = rolling_patch(n, spacing, mode)
+            model, state = rolling_patch(n, spacing, mode, k)
             sim = Simulator(model, device)
             walls, solved, t0 = [], [], time.perf_counter()
             while state.time < end:
@@ -494,15 +496,16 @@ def cost(device, counts_by_mode, spacing, end):
     return rows
 
 
-def implicit_solvers(device, counts, end):
-    """``cost`` on pairs for each of ``counts``, the implicit step's Newton systems solved by
-    Cholesky and by NumPy's least squares (an SVD, as before), the two interleaved."""
-    least_squares = lambda matrix, rhs: np.linalg.lstsq(matrix, rhs, rcond=1e-14)[0]  # noqa: E731
+def implicit_solvers(device, counts, end, k):
+    """``cost`` on pairs for each of ``counts`` (cells of ``k`` subdivisions), the implicit step's
+    Newton step solved without forming its matrix (MobilityResponse) and from the matrix formed
+    (its ``newton_step`` declined), the two interleaved."""
+    formed = mock.patch.object(implicit.MobilityResponse, "newton_step", lambda *args: None)
     rows = []
     for n in counts:
-        for name, solver in (("cholesky", implicit.solve_semidefinite), ("least squares", least_squares)):
-            with mock.patch.object(implicit, "solve_semidefinite", solver):
-                rows += [dict(implicit=name, **row) for row in cost(device, {"pairs": [n]}, 25e-6, end)]
+        for name, patch in (("structured", contextlib.nullcontext()), ("formed", formed)):
+            with patch:
+                rows += [dict(implicit=name, **row) for row in cost(device, {"pairs": [n]}, 25e-6, end, k)]
     return rows
 
 
@@ -581,8 +584,8 @@ def main():
         print(f"wrote {write_csv('many_cells_batch_coarse.csv', rows)}")
     if "implicit" in args.parts:
         rows = implicit_solvers(args.device, args.cells or ([3, 8] if args.quick else [16, 64]),
-                                5e-4 if args.quick else 2e-3)
-        for name in ("cholesky", "least squares"):
+                                5e-4 if args.quick else 2e-3, args.k)
+        for name in ("structured", "formed"):
             slope, _ = exponent([r for r in rows if r["implicit"] == name], "step_s")
             print(f"{name}: a step without new snapshots costs n^{slope:.2f}")
         print(f"wrote {write_csv('many_cells_implicit.csv', rows)}")

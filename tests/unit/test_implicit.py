@@ -1,9 +1,11 @@
 """The joint backward-Euler step (warpbem/dynamics/implicit.py) with its rate response held
-whole or factored over cells (R = G V, the path of many cells)."""
+whole or factored over cells (R = G V, the path of many cells), and its Newton step solved
+without forming the Newton matrix (MobilityResponse)."""
 
 import numpy as np
 
-from warpbem.dynamics.implicit import DenseResponse, FactoredResponse, ImplicitSystem
+from warpbem.dynamics.implicit import (STRUCTURED_FROM, DenseResponse, FactoredResponse, ImplicitSystem,
+                                       MobilityResponse)
 from warpbem.forces.bond_model import BondLaws
 from warpbem.forces.interaction import ImplicitCoordinates
 
@@ -53,3 +55,61 @@ def test_the_factored_response_takes_the_same_step_as_the_whole_one():
     np.testing.assert_allclose(z1, z0, rtol=1e-8, atol=1e-8 * np.abs(z0).max())
     np.testing.assert_allclose(f1, f0, rtol=1e-8, atol=1e-8 * np.abs(f0).max())
     assert np.abs(f0).max() > 1e-12  # the bonds carry load: the step is not the trivial one
+
+
+def test_the_newton_step_without_its_matrix_is_the_formed_one():
+    """H = Q + dt Q A Q = Q (I + dt A Q) with A = D G^T K G D when the basis's motion is V = D Q
+    (implicit.MobilityResponse): for 24 cells (144 coefficients, above STRUCTURED_FROM) with
+    three stiff bonds each on their lower half, a grand mobility Q of self blocks and couplings
+    that fall as (a / r)^3 over a 25 um patch (seeded, symmetric positive definite), the Newton
+    step from GMRES on (I + dt A Q) s = -(z - D G^T f) is the step -H^-1 g of H formed and
+    factored (FactoredResponse with V = D Q), to 1e-9; the whole backward-Euler solve gives the
+    same coefficients and forces to 1e-8; and the GMRES path was taken (the formed one is
+    patched to fail loudly)."""
+    rng = np.random.default_rng(7)
+    cells, radius, mu = 24, 5e-6, 1e-3
+    p = 6 * cells
+    assert p >= STRUCTURED_FROM
+    grid = np.array([(i % 6, i // 6) for i in range(cells)]) * 25e-6
+    stokes = 1.0 / (6 * np.pi * mu * radius)  # m/(N s)
+    quadratic = np.kron(np.eye(cells), np.diag([0.3, 0.3, 0.05, 0.3, 0.3, 0.6]) * stokes)
+    for i in range(cells):
+        for j in range(i):
+            coupling = rng.normal(size=(6, 6)) * 0.3 * stokes * (radius / np.linalg.norm(grid[i] - grid[j])) ** 3
+            quadratic[6 * i:6 * i + 6, 6 * j:6 * j + 6] = coupling
+            quadratic[6 * j:6 * j + 6, 6 * i:6 * i + 6] = coupling.T
+    assert np.linalg.eigvalsh(quadratic).min() > 0
+    bonds = 3 * cells
+    unit_force, unit_torque = np.zeros((3 * bonds, cells, 3)), np.zeros((3 * bonds, cells, 3))
+    for g in range(bonds):
+        arm = rng.normal(size=3) * 1e-6 - np.array([0.0, 0.0, radius])
+        for i in range(3):
+            unit_force[3 * g + i, g // 3, i] = 1.0
+            unit_torque[3 * g + i, g // 3] = np.cross(arm, np.eye(3)[i])
+    coordinates = ImplicitCoordinates(rng.normal(size=3 * bonds) * 40e-9, unit_force, unit_torque)
+    structured = MobilityResponse.of(coordinates, quadratic, np.full(cells, radius))
+    formed = FactoredResponse(structured.geometry, structured.motion)
+    rates = rng.normal(size=3 * bonds) * 1e-5
+    laws = [(slice(0, 3 * bonds), Springs().law)]
+    dt = 1e-4
+    system = ImplicitSystem(coordinates.values, rates, structured, quadratic, laws)
+    z = rng.normal(size=p) * 1e-12
+    _, force, stiffness = system.objective(z, dt)
+    gradient = quadratic @ z - structured.transposed(force)
+    step = structured.newton_step(z, force, stiffness, dt)
+    expected = -np.linalg.solve(system.hessian(stiffness, dt), gradient)
+    np.testing.assert_allclose(step, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
+
+    def refuse(*args):
+        raise AssertionError("the structured response formed its Newton matrix")
+
+    solves = []
+    for response in (structured, formed):
+        system = ImplicitSystem(coordinates.values, rates, response, quadratic, laws)
+        if response is structured:
+            object.__setattr__(system, "hessian", refuse)  # a frozen dataclass: on this instance only
+        solves.append(system.solve(dt, []))
+    (z0, f0), (z1, f1) = solves
+    np.testing.assert_allclose(z0, z1, rtol=0, atol=1e-8 * np.abs(z1).max())
+    np.testing.assert_allclose(f0, f1, rtol=0, atol=1e-8 * np.abs(f1).max())
+    assert np.abs(f1).max() > 1e-12

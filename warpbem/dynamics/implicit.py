@@ -30,6 +30,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 import scipy.sparse
+import scipy.sparse.linalg as spla
+
+from ..hydro.linalg import ConvergenceError, gmres
 
 MAX_ITERATIONS = 200
 LENGTH_TOLERANCE = 1e-16  # m: converged when no coordinate moves by more (plus 1e-13 relative)
@@ -87,6 +90,11 @@ class DenseResponse:
         """The coefficients that hold every coordinate still (R z = -r, least squares)."""
         return np.linalg.lstsq(self.matrix, -rates, rcond=1e-14)[0]
 
+    def newton_step(self, z, force, stiffness, dt):
+        """None: R held whole has no structure that solves the Newton system without forming it
+        (MobilityResponse has)."""
+        return None
+
 
 class FactoredResponse(DenseResponse):
     """R = G V, never formed: G (m, 6 n, sparse) the rate of each coordinate per unit rigid
@@ -112,19 +120,94 @@ class FactoredResponse(DenseResponse):
         return self.motion.T @ (self.geometry.T @ f)
 
     def weighted_gram(self, where, k):
+        return self.motion.T @ (self.stiffness_gram(where, k) @ self.motion)
+
+    def stiffness_gram(self, where, k):
+        """G_w^T K G_w (sparse, 6 n x 6 n) of the coordinates ``where`` and their stiffness k."""
         g = self.geometry[where]
         if k.ndim == 1:
             weights = scipy.sparse.diags(k)
         else:  # 3 x 3 blocks along the diagonal
             weights = scipy.sparse.bsr_matrix((k, np.arange(len(k)), np.arange(len(k) + 1)),
                                               shape=(g.shape[0], g.shape[0]))
-        return self.motion.T @ ((g.T @ (weights @ g)) @ self.motion)
+        return (g.T @ (weights @ g)).tocsr()
 
     def holding_loads(self, rates):
         """Least squares through the normal equations, (G V)^T (G V) z = -(G V)^T r, whose matrix
         is V^T (G^T G) V (p x p)."""
         gram = self.motion.T @ ((self.geometry.T @ self.geometry) @ self.motion)
         return solve_semidefinite(gram, -self.transposed(rates))
+
+
+# relative residual of the Newton step's GMRES (MobilityResponse): Newton converges linearly at
+# this rate once its own steps reach it, and ImplicitSystem.solve stops where they stop shrinking
+NEWTON_TOLERANCE = 1e-12
+# coefficients from which MobilityResponse solves the Newton step by GMRES: below, H formed and
+# factored is cheaper (a synthetic system of cells 25 um apart beside a running scene, one Newton
+# step: 0.6 against 1.9 ms at 96 coefficients, 16 cells; 42 against 2.4 ms at 216, 36 cells;
+# 46 against 4.3 ms at 384, 64 cells)
+STRUCTURED_FROM = 128
+
+
+class MobilityResponse(FactoredResponse):
+    """R = G V with V = D Q: the basis of unit forces and torques on each free body (torques of 1 N
+    times the outer radius), whose motion is the symmetrised grand mobility Q itself, rows scaled
+    by D (1 for a velocity, 1 / radius for an angular velocity; hydrodynamics.py). Then the Newton
+    matrix factors as
+
+        H = Q + dt Q A Q = Q (I + dt A Q),      A = D G^T K G D  (sparse over cells),
+
+    and the gradient as g = Q z - R^T f = Q (z - D G^T f), so the Newton step H s = -g is
+    (I + dt A Q) s = -(z - D G^T f): solved by GMRES, whose products cost O(p^2), where forming
+    H costs O(p^3) (two p x p products per law) and its factor O(p^3) again. Preconditioned by
+    the system of each cell alone (its 6 x 6 diagonal block, I + dt A_ii Q_ii): what it leaves to
+    GMRES is the hydrodynamic coupling between cells, which is weak for cells several radii apart
+    (issue 25: the implicit solve sparse over cells; py-spy put H's products and factor at half
+    of a step of 64 cells, 384 coefficients)."""
+
+    def __init__(self, geometry, quadratic: np.ndarray, scales: np.ndarray):
+        super().__init__(geometry, scales[:, None] * quadratic)
+        self.quadratic, self.scales = quadratic, scales
+
+    @classmethod
+    def of(cls, coordinates, quadratic, radii) -> "MobilityResponse":
+        """From the coordinates' unit loads (m, n, 3) over n free bodies, the symmetrised grand
+        mobility ``quadratic`` (6 n, 6 n) in the basis above and the bodies' outer ``radii`` (m)."""
+        m, n = coordinates.unit_force.shape[:2]
+        if quadratic.shape != (6 * n, 6 * n):
+            raise ValueError(f"a grand mobility of {n} free bodies is ({6 * n}, {6 * n}), got {quadratic.shape}")
+        g = np.concatenate([coordinates.unit_force, coordinates.unit_torque], axis=2).reshape(m, 6 * n)
+        scales = np.concatenate([np.ones((n, 3)), np.repeat(1.0 / np.asarray(radii, float)[:, None], 3, axis=1)],
+                                axis=1).ravel()
+        return cls(scipy.sparse.csr_matrix(g), quadratic, scales)
+
+    def newton_step(self, z, force, stiffness, dt):
+        """The Newton step s of the class docstring at coefficients ``z`` with forces ``force`` and
+        [(slice, stiffness)]; None below STRUCTURED_FROM coefficients or where GMRES does not reach
+        NEWTON_TOLERANCE (the caller then forms H)."""
+        p = len(z)
+        if p < STRUCTURED_FROM:
+            return None
+        stiff = sum((self.stiffness_gram(where, k) for where, k in stiffness), scipy.sparse.csr_matrix((p, p)))
+        a = self.scales[:, None] * stiff.toarray() * self.scales[None, :]
+        q = self.quadratic
+        n = p // 6
+        cells = np.arange(n)
+        own = np.eye(6) + dt * np.einsum("nij,njk->nik", a.reshape(n, 6, n, 6)[cells, :, cells],
+                                         q.reshape(n, 6, n, 6)[cells, :, cells])
+        alone = np.linalg.inv(own)  # each cell's own system (6 x 6), inverted once per Newton step
+
+        def each_cell(r):
+            return np.einsum("nij,nj->ni", alone, r.reshape(n, 6)).ravel()
+
+        operator = spla.LinearOperator((p, p), matvec=lambda s: s + dt * (a @ (q @ s)), dtype=np.float64)
+        preconditioner = spla.LinearOperator((p, p), matvec=each_cell, dtype=np.float64)
+        rhs = -(z - self.scales * (self.geometry.T @ force))
+        try:
+            return gmres(operator, rhs, tolerance=NEWTON_TOLERANCE, max_iterations=min(p, 200),
+                         preconditioner=preconditioner).solution
+        except ConvergenceError:
+            return None
 
 
 @dataclass(frozen=True)
@@ -163,6 +246,12 @@ class ImplicitSystem:
         energy, force, stiffness = self.evaluate(self.end_values(z, dt))
         return 0.5 * z @ self.quadratic @ z + np.sum(energy) / dt, force, stiffness
 
+    def _newton_step(self, z, force, stiffness, dt, gradient):
+        """The Newton step -H^-1 g: from the rate response's own structure where it has one
+        (MobilityResponse), else from H formed."""
+        step = self.rate_response.newton_step(z, force, stiffness, dt)
+        return -solve_semidefinite(self.hessian(stiffness, dt), gradient) if step is None else step
+
     def _smaller_gradient(self, z, force, gradient) -> bool:
         return np.linalg.norm(self.quadratic @ z - self.rate_response.transposed(force)) < 0.5 * np.linalg.norm(gradient)
 
@@ -171,8 +260,9 @@ class ImplicitSystem:
         coefficients tried in order after z = 0 and the loads that hold every coordinate still
         (s' = s, admissible since the state is), until one is admissible."""
         p = self.quadratic.shape[0]
-        still = self.rate_response.holding_loads(self.rates)
-        for z in [np.zeros(p), still, *starts]:
+        # the holding loads only where z = 0 is not admissible (a least-squares solve of p unknowns)
+        for z in [np.zeros(p), None, *starts]:
+            z = self.rate_response.holding_loads(self.rates) if z is None else z
             phi, force, stiffness = self.objective(z, dt)
             if np.isfinite(phi):
                 break
@@ -181,7 +271,7 @@ class ImplicitSystem:
         previous = np.inf
         for _ in range(MAX_ITERATIONS):
             gradient = self.quadratic @ z - self.rate_response.transposed(force)
-            step = -solve_semidefinite(self.hessian(stiffness, dt), gradient)
+            step = self._newton_step(z, force, stiffness, dt, gradient)
             moves = dt * np.abs(self.rate_response @ step)
             # converged when the step moves no coordinate and changes the motion it causes by
             # no more than round-off (in the dissipation norm z.Q.z: a rolling cell can turn

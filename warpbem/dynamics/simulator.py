@@ -30,7 +30,7 @@ from ..surfaces.placement import PlacementError, check_placement
 from . import integrate
 from .frame import Frame
 from .hydrodynamics import Hydrodynamics, HydrodynamicSolves
-from .implicit import DenseResponse, FactoredResponse, ImplicitSolveError, ImplicitSystem
+from .implicit import DenseResponse, ImplicitSolveError, ImplicitSystem, MobilityResponse
 from .model import Model, build_solver
 from .state import State
 
@@ -193,8 +193,8 @@ class Simulator:
         # rates consistent with the symmetrised dissipation (reciprocity; hydrodynamics.py)
         if kind == "coordinates":
             rate_response = DenseResponse(quadratic)
-        elif self.hydro.pairwise is not None:  # many cells: R never formed (implicit.py)
-            rate_response = FactoredResponse.of(coordinates, basis.velocity, basis.angular_velocity)
+        elif self.hydro.pairwise is not None:  # many cells: R never formed, H neither (implicit.py)
+            rate_response = MobilityResponse.of(coordinates, quadratic, self.model.outer_radii)
         else:
             rate_response = DenseResponse(np.array([coordinates.rates(u, w) for u, w in
                                                     zip(basis.velocity, basis.angular_velocity)]).T)
