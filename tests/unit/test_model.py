@@ -93,9 +93,17 @@ class CountingFinder:
         self.finder, self.counts = finder, {}
 
     def between(self, bodies, i, j):
+        self._count(bodies, i, j)
+        return self.finder.between(bodies, i, j)
+
+    def to_wall(self, bodies, indices):
+        for i in indices:
+            self._count(bodies, i, "wall")
+        return self.finder.to_wall(bodies, indices)
+
+    def _count(self, bodies, i, j):
         key = (tuple(b.position.tobytes() for b in bodies), i, j)
         self.counts[key] = self.counts.get(key, 0) + 1
-        return self.finder.between(bodies, i, j)
 
 
 @pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")

@@ -117,6 +117,31 @@ def test_gap_to_the_wall_is_the_lowest_point(finder):
     assert g.point[2] == pytest.approx(g.distance) and g.other_point[2] == 0.0
 
 
+def test_gaps_to_the_wall_searched_together_are_those_searched_one_by_one(finder):
+    """GapFinder.to_wall searches several bodies' candidate elements in one launch: each body's
+    gap, points and normal are those of its own search, bit for bit (a sphere tilted at 200 nm,
+    an upright one at 1 um and a spheroid turned about y at 50 nm: the elements differ in count
+    and shape), and each is the analytic gap of the QUAD9 sphere's lowest node where one lies
+    on the axis (the upright sphere)."""
+    a = 5e-6
+    sphere, spheroid = wb.mesh.sphere(a, 3), wb.mesh.spheroid(a, 0.6 * a, 3)
+    tilted = np.array([np.cos(0.3), np.sin(0.3), 0.2, 0.0])
+    turned = np.array([np.cos(0.4), 0.0, np.sin(0.4), 0.0])
+    bodies = [wb.Body(sphere, position=(1e-6, -2e-6, a + 2e-7), orientation=tilted / np.linalg.norm(tilted)),
+              wb.Body(sphere, position=(30e-6, 0.0, a + 1e-6)),
+              wb.Body(spheroid, position=(-30e-6, 5e-6, 0.0))]
+    lowest = bodies[2].world_nodes()[:, 2].min()
+    bodies[2] = wb.Body(spheroid, position=(-30e-6, 5e-6, 5e-8 - lowest), orientation=turned)
+    together = finder.to_wall(bodies, [2, 0, 1])
+    for gap, i in zip(together, [2, 0, 1]):
+        alone = finder.between(bodies, i, WALL)
+        assert gap.body == i and gap.distance == alone.distance
+        np.testing.assert_array_equal(gap.point, alone.point)
+        np.testing.assert_array_equal(gap.other_point, alone.other_point)
+    assert together[2].distance == pytest.approx(1e-6, rel=1e-9)
+    assert finder.to_wall(bodies, []) == []
+
+
 def test_contacts_carry_the_points_where_their_forces_act():
     """A cell 10 nm (between roughness layers) from the wall and from another cell: each
     contact's coordinate holds its closest points, so forces along the coordinates become point

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import warpbem as wb
-from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion
+from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion, Responses
 from warpbem.dynamics.model import Flow, Model, SolverOptions, build_solver
 from warpbem.surfaces.body import Body
 
@@ -113,3 +113,28 @@ def test_near_contact_the_lateral_lattice_is_halved_until_no_gap_moves_by_more_t
 def test_interaction_lattice_finer_than_the_fine_one_is_refused():
     with pytest.raises(ValueError, match=r"reuse_interaction: 1e-09 is outside the allowed range \[2e-09, 1e-06\] \(>= reuse_tolerance > 0\)"):
         SolverOptions(reuse_tolerance=2e-9, reuse_interaction=1e-9)
+
+
+def test_the_dissipation_of_a_basis_is_load_dot_motion_symmetrised():
+    """Responses.quadratic, Q_kl = (load k) . (motion l) symmetrised: for the "bodies" basis (one
+    force or torque component per load) taken by a gather, bit for bit the product of the loads
+    with the motions; for loads of several components (a bond's direction on two bodies) the
+    product itself; against np.einsum over bodies and components, for random (seeded) motions."""
+    rng = np.random.default_rng(5)
+    n = 4
+    p = 6 * n
+    velocity, angular = rng.normal(size=(p, n, 3)), rng.normal(size=(p, n, 3))
+    single_force, single_torque = np.zeros((p, n, 3)), np.zeros((p, n, 3))
+    for b in range(n):
+        for i in range(3):
+            single_force[6 * b + i, b, i] = 1.0
+            single_torque[6 * b + 3 + i, b, i] = A * (1.0 + b)
+    spread_force, spread_torque = rng.normal(size=(p, n, 3)), rng.normal(size=(p, n, 3))
+    for force, torque in ((single_force, single_torque), (spread_force, spread_torque)):
+        q = (np.einsum("kbi,lbi->kl", force, velocity) + np.einsum("kbi,lbi->kl", torque, angular))
+        expected = 0.5 * (q + q.T)
+        got = Responses(velocity, angular, velocity, angular, force, torque, 0, 0.0).quadratic()
+        np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+        if force is single_force:
+            product = force.reshape(p, -1) @ velocity.reshape(p, -1).T + torque.reshape(p, -1) @ angular.reshape(p, -1).T
+            assert np.array_equal(got, 0.5 * (product + product.T))

@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import runtime
 from ..options import declared
-from ..surfaces.gaps import WALL, bounding_spheres
+from ..surfaces.gaps import bounding_spheres
 from . import hertz
 from .bond_model import BondLaws, BondOptions, sample_receptors
 from .interaction import BoundInteraction, ImplicitCoordinates, Interaction
@@ -146,8 +146,8 @@ class BoundAdhesion(BondLaws, BoundInteraction):
         self._stepping()
         wp, k = self.wp, self.k
         centre = np.array([b.position for b in bodies])
-        for b in self.cells:
-            centre[b] = contacts.gap(int(b), WALL).point  # the foot of the closest point (x, y are used)
+        for b, gap in zip(self.cells, contacts.to_wall(self.cells)):
+            centre[b] = gap.point  # the foot of the closest point (x, y are used)
         tips = self.tips_at(contacts.shapes)
         return dict(tips=self._tips if tips is self.tips else wp.array(tips, dtype=k.vec3, device=self.device),
                     positions=wp.array(np.array([b.position for b in bodies]), dtype=k.vec3, device=self.device),
@@ -311,7 +311,7 @@ class BoundAdhesion(BondLaws, BoundInteraction):
         APPROACH_MARGIN for the approach over one step)."""
         rows = np.flatnonzero(part["receptor"] >= 0)
         if not len(rows):
-            lowest = min(contacts.gap(int(b), WALL).distance for b in self.cells) - self.roughness
+            lowest = min(gap.distance for gap in contacts.to_wall(self.cells)) - self.roughness
             nearest = min([g.distance for g in contacts.within(self.cell_reach + self.roughness + APPROACH_MARGIN)
                            if g.body in self.cells and g.other in self.ligand_bodies], default=np.inf) - self.roughness
             if lowest > self.reach + APPROACH_MARGIN and nearest > self.cell_reach + APPROACH_MARGIN:

@@ -92,16 +92,34 @@ class GapFinder:
             point_a, point_b)
         return point_a.numpy(), point_b.numpy()
 
+    def to_wall(self, bodies, indices) -> list[Gap]:
+        """Closest approach of each body ``indices`` to the wall z = 0, all searched in one kernel
+        launch (a launch per cell, with its arrays, took most of the gap search of 64 rolling
+        cells; py-spy on scenes/rolling_patch_8x8.toml)."""
+        nodes, candidates, start = [], [], 0
+        for i in indices:
+            nodes_i = bodies[i].world_nodes()[bodies[i].mesh.elements]
+            centres, radii = bounding_spheres(nodes_i)
+            candidates.append(start + np.flatnonzero(centres[:, 2] - radii <= centres[:, 2].min()))
+            nodes.append(nodes_i)
+            start += len(nodes_i)
+        if not nodes:
+            return []
+        elements = np.concatenate(candidates)
+        pa, pb = self._search(np.concatenate(nodes), elements, None, elements)
+        gaps, first = [], 0
+        for i, found in zip(indices, candidates):
+            best = first + int(np.argmin(pa[first:first + len(found), 2]))
+            gaps.append(Gap(int(i), WALL, float(pa[best, 2]), pa[best], pb[best], np.array([0.0, 0.0, 1.0])))
+            first += len(found)
+        return gaps
+
     def between(self, bodies, i: int, j: int) -> Gap:
         """Closest approach of body i to body j, or to the wall z = 0 when j is WALL."""
+        if j == WALL:
+            return self.to_wall(bodies, [i])[0]
         nodes_i = bodies[i].world_nodes()[bodies[i].mesh.elements]
         centres_i, radii_i = bounding_spheres(nodes_i)
-        if j == WALL:
-            upper = centres_i[:, 2].min()
-            candidates = np.flatnonzero(centres_i[:, 2] - radii_i <= upper)
-            pa, pb = self._search(nodes_i, candidates, None, candidates)
-            best = int(np.argmin(pa[:, 2]))
-            return Gap(i, WALL, float(pa[best, 2]), pa[best], pb[best], np.array([0.0, 0.0, 1.0]))
         nodes_j = bodies[j].world_nodes()[bodies[j].mesh.elements]
         centres_j, radii_j = bounding_spheres(nodes_j)
         centre_distance = np.linalg.norm(centres_i[:, None] - centres_j[None], axis=-1)
@@ -142,13 +160,23 @@ class Contacts:
             self._gaps[(i, j)] = self.finder.between(self.shapes, i, j)
         return self._gaps[(i, j)]
 
+    def to_wall(self, indices) -> list[Gap]:
+        """The exact gaps of free bodies ``indices`` to the wall, those not yet known searched
+        together (GapFinder.to_wall)."""
+        missing = [int(i) for i in indices if (int(i), WALL) not in self._gaps]
+        for gap in self.finder.to_wall(self.shapes, missing):
+            self._gaps[(gap.body, WALL)] = gap
+        return [self._gaps[(int(i), WALL)] for i in indices]
+
     def pairs(self, within: float) -> list[tuple[int, int]]:
         return candidate_pairs(self.positions, self.outer_radii, self.fixed, self.wall, within)
 
     def within(self, distance: float) -> list[Gap]:
         """Exact gaps of every pair whose bounding spheres come closer than ``distance`` (m): all
         pairs whose gap can be below it (some returned gaps may exceed it)."""
-        return [self.gap(i, j) for i, j in self.pairs(distance)]
+        pairs = self.pairs(distance)
+        self.to_wall([i for i, j in pairs if j == WALL])
+        return [self.gap(i, j) for i, j in pairs]
 
     def smallest(self, distance: float) -> float:
         """The smallest exact gap (m, >= 0) below ``distance``, else ``distance``."""
