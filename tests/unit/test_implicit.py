@@ -3,6 +3,7 @@ whole or factored over cells (R = G V, the path of many cells), and its Newton s
 without forming the Newton matrix (MobilityResponse)."""
 
 import numpy as np
+import pytest
 
 from warpbem.dynamics.implicit import (STRUCTURED_FROM, DenseResponse, FactoredResponse, ImplicitSystem,
                                        MobilityResponse)
@@ -87,7 +88,14 @@ def test_the_newton_step_without_its_matrix_is_the_formed_one():
             unit_force[3 * g + i, g // 3, i] = 1.0
             unit_torque[3 * g + i, g // 3] = np.cross(arm, np.eye(3)[i])
     coordinates = ImplicitCoordinates(rng.normal(size=3 * bonds) * 40e-9, unit_force, unit_torque)
-    structured = MobilityResponse.of(coordinates, quadratic, np.full(cells, radius))
+    load_force, load_torque = np.zeros((p, cells, 3)), np.zeros((p, cells, 3))
+    for b in range(cells):
+        for i in range(3):
+            load_force[6 * b + i, b, i], load_torque[6 * b + 3 + i, b, i] = 1.0, radius
+    structured = MobilityResponse.of(coordinates, quadratic, load_force, load_torque)
+    np.testing.assert_array_equal(structured.scales.reshape(cells, 6), [[1.0] * 3 + [1.0 / radius] * 3] * cells)
+    with pytest.raises(ValueError, match="one load per degree of freedom"):
+        MobilityResponse.of(coordinates, quadratic, load_force[::-1], load_torque[::-1])
     formed = FactoredResponse(structured.geometry, structured.motion)
     rates = rng.normal(size=3 * bonds) * 1e-5
     laws = [(slice(0, 3 * bonds), Springs().law)]

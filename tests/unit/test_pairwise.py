@@ -255,3 +255,55 @@ def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_pa
         np.testing.assert_array_equal(f["bond_receptor"][:], g["bond_receptor"][:])
         # the resumed solves start GMRES from another previous solution (round-off apart)
         np.testing.assert_allclose(f["position"][:], g["position"][:], rtol=0, atol=1e-9 * A)
+
+
+@pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
+def test_sixteen_cells_step_alike_with_the_newton_step_solved_by_gmres(tmp_path, monkeypatch):
+    """The 4 x 4 patch above with the implicit step's Newton step solved without its matrix
+    (implicit.MobilityResponse, GMRES on (I + dt A Q) s = b; made to serve 96 coefficients by
+    lowering STRUCTURED_FROM) and formed and factored (the default at 96): the same bonds, and
+    positions within 1e-9 radii (GMRES's 1e-12 against the factor's round-off). At every state
+    the response's motion D Q is the basis's own motion V to 1e-12 (the pairs' grand mobility is
+    symmetric: V = D Q is what lets the Newton step skip its matrix)."""
+    from warpbem.app import run
+    from warpbem.dynamics import implicit
+    from warpbem.dynamics.simulator import Simulator
+
+    deviations = []
+    evaluate = Simulator._implicit
+
+    def checked(self, *args):
+        hydro, found = evaluate(self, *args)
+        if found is not None:
+            response, basis = found.system.rate_response, hydro.basis
+            motion = np.concatenate([basis.velocity, basis.angular_velocity], axis=2).reshape(len(basis.velocity), -1).T
+            deviations.append(np.abs(response.motion - motion).max() / np.abs(motion).max())
+        return hydro, found
+
+    monkeypatch.setattr(Simulator, "_implicit", checked)
+
+    path = tmp_path / "patch.toml"
+    path.write_text(PAIRS_SCENE.replace("count = [2, 1]", "count = [4, 4]").replace(
+        "pitch = [10.0e-6, 0.0]", "pitch = [10.0e-6, 10.0e-6]").replace(
+        'grand_mobility = "pairs"',
+        'grand_mobility = "pairs"\npair_lateral = 2.0e-6\npair_cutoff = 1.2e-5\nreuse_interaction = 2.0e-7'))
+    run.run(path, tmp_path / "formed.h5", progress=lambda line: None)
+    steps = []
+    original = implicit.MobilityResponse.newton_step
+
+    def counted(self, *args):
+        step = original(self, *args)
+        steps.append(step is not None)
+        return step
+
+    monkeypatch.setattr(implicit, "STRUCTURED_FROM", 0)
+    monkeypatch.setattr(implicit.MobilityResponse, "newton_step", counted)
+    run.run(path, tmp_path / "structured.h5", progress=lambda line: None)
+    import h5py
+
+    assert steps and all(steps)  # every Newton step of the second run came from GMRES
+    assert deviations and max(deviations) < 1e-12
+    with h5py.File(tmp_path / "structured.h5") as f, h5py.File(tmp_path / "formed.h5") as g:
+        assert g["bond_count"][-1].sum() > 0
+        np.testing.assert_array_equal(f["bond_receptor"][:], g["bond_receptor"][:])
+        np.testing.assert_allclose(f["position"][:], g["position"][:], rtol=0, atol=1e-9 * A)

@@ -170,16 +170,20 @@ class MobilityResponse(FactoredResponse):
         self.quadratic, self.scales = quadratic, scales
 
     @classmethod
-    def of(cls, coordinates, quadratic, radii) -> "MobilityResponse":
+    def of(cls, coordinates, quadratic, load_force, load_torque) -> "MobilityResponse":
         """From the coordinates' unit loads (m, n, 3) over n free bodies, the symmetrised grand
-        mobility ``quadratic`` (6 n, 6 n) in the basis above and the bodies' outer ``radii`` (m)."""
+        mobility ``quadratic`` (6 n, 6 n) and the basis's loads (6 n, n, 3 each), which must be
+        one component each, load k on the k-th of the bodies' 6 n degrees of freedom (force x,
+        y, z, torque x, y, z of each body in turn): D is one over each load's magnitude."""
         m, n = coordinates.unit_force.shape[:2]
-        if quadratic.shape != (6 * n, 6 * n):
-            raise ValueError(f"a grand mobility of {n} free bodies is ({6 * n}, {6 * n}), got {quadratic.shape}")
+        loads = np.concatenate([load_force, load_torque], axis=2).reshape(-1, 6 * n)
+        magnitudes = np.diag(loads) if loads.shape == (6 * n, 6 * n) else np.zeros(0)
+        if (quadratic.shape != (6 * n, 6 * n) or len(magnitudes) != 6 * n or np.any(magnitudes == 0.0)
+                or np.count_nonzero(loads) != 6 * n):
+            raise ValueError(f"MobilityResponse takes the basis of one load per degree of freedom of {n} free bodies,"
+                             f" in their order, and its ({6 * n}, {6 * n}) grand mobility")
         g = np.concatenate([coordinates.unit_force, coordinates.unit_torque], axis=2).reshape(m, 6 * n)
-        scales = np.concatenate([np.ones((n, 3)), np.repeat(1.0 / np.asarray(radii, float)[:, None], 3, axis=1)],
-                                axis=1).ravel()
-        return cls(scipy.sparse.csr_matrix(g), quadratic, scales)
+        return cls(scipy.sparse.csr_matrix(g), quadratic, 1.0 / magnitudes)
 
     def newton_step(self, z, force, stiffness, dt):
         """The Newton step s of the class docstring at coefficients ``z`` with forces ``force`` and

@@ -194,7 +194,7 @@ class Simulator:
         if kind == "coordinates":
             rate_response = DenseResponse(quadratic)
         elif self.hydro.pairwise is not None:  # many cells: R never formed, H neither (implicit.py)
-            rate_response = MobilityResponse.of(coordinates, quadratic, self.model.outer_radii)
+            rate_response = MobilityResponse.of(coordinates, quadratic, basis.load_force, basis.load_torque)
         else:
             rate_response = DenseResponse(np.array([coordinates.rates(u, w) for u, w in
                                                     zip(basis.velocity, basis.angular_velocity)]).T)
