@@ -116,7 +116,7 @@ def test_background_flow_by_the_tree_matches_the_direct_sum(background_8x8):
     """Interpolated far field plus the exact near field of each point's leaf (treecode.py)
     against the double layer and completions of the same density summed over every element:
     the error over all points within the tree's tolerance (1e-6) of the disturbance, as for a
-    product (README "Large arrays"), and at the worst point within a few times it (the point
+    product (docs/benchmarks.md, "Large arrays"), and at the worst point within a few times it (the point
     forces' share of the far field is larger, treecode.py)."""
     bodies, field = background_8x8
     assert field.far.has_far_field

@@ -180,7 +180,7 @@ def test_a_dense_run_updates_its_matrix_in_place():
 
 
 def test_unresolved_contacts_warn_once_naming_the_bodies():
-    """Closer than the mesh resolves (README stability map: errors pass 1 %), the solver warns,
+    """Closer than the mesh resolves (docs/benchmarks.md, stability map: errors pass 1 %), the solver warns,
     naming the bodies; a solver used for many steps warns once per contact. Unrefined meshes
     (contact_refinement 0, cheap here) warn below three element radii; refined ones below
     refinement.WARN_FRACTION of the body's element radius (checked on the refinement alone: a

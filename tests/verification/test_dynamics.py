@@ -80,7 +80,7 @@ def test_heavy_cell_settles_at_brenners_speed_and_the_step_shrinks():
     buoyant weight gives against Brenner's (1961) wall-corrected drag, W = F / (6 pi mu a
     lambda(h)); the adaptive step shortens as the gap falls below contact_gap, and it never
     touches the wall. Each frame's velocity is the one at its own height (down to h/a = 1.11,
-    where the k = 4 sphere's squeeze drag is 1.5 % off: README accuracy table)."""
+    where the k = 4 sphere's squeeze drag is 1.5 % off: docs/validation.md)."""
     from .sphere_wall_series import brenner_lambda
 
     a, mu = 5e-6, 1e-3

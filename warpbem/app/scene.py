@@ -36,7 +36,7 @@ from ..surfaces.placement import PlacementError, check_placement
 
 
 MESH_SHAPES = ("sphere", "spheroid", "file")
-ADHESION_REUSE_TOLERANCE = 2e-9  # m: chosen from benchmarks/adhesion.py (README: adhesion)
+ADHESION_REUSE_TOLERANCE = 2e-9  # m: chosen from benchmarks/adhesion.py (docs/adhesion.md)
 
 class SceneError(ValueError):
     """A scene that cannot run; the message names the field."""

@@ -14,7 +14,7 @@ import numpy as np
 from .state import State
 
 SCHEMES = ("euler", "heun")
-DEFAULT_SCHEME = "heun"  # second order: the thesis's trajectories need it near contact (README: dynamics)
+DEFAULT_SCHEME = "heun"  # second order: the thesis's trajectories need it near contact (docs/dynamics.md)
 
 
 def quaternion_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:

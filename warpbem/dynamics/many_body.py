@@ -28,7 +28,7 @@ of 72 n unknowns in one batched GMRES (0.56 s for 16 cells, 8.0 s for 64, growin
 4 to 64; one after the other 0.77 and 25.7 s: ``benchmarks/many_cells.py --parts batch``), and the coarse pairs'
 snapshots at the snapped offsets, which the cells' lattice makes recur. A patch that rolls as a
 whole keeps its remainder: 0.1 s of the 4 x 4 patch took 14 min 26 s with it, against 15 min 50 s
-on the pairs alone (README "Many adhesive cells"). What it does not reach: linear cost (the
+on the pairs alone (docs/many-cells.md). What it does not reach: linear cost (the
 coarse whole system grows as n^1.66; a far field at coarse resolution would be needed) and close
 trains (4.2e-3 of the flow's motion at 2 um between the surfaces).
 """

@@ -67,8 +67,8 @@ where a neo-Hookean stress departs from Hooke's by ~D / 2 = 10 %), for a turn pe
 ``ROTATION_PER_STEP`` (the target then lags by about half of it) and for an unresolved patch
 whose Hertz approach a^2 / R passes 1 nm; it stops (``DeformationError``, naming the body and the
 way out) past ``LINEAR_LIMIT`` (0.5) or where the surface folds (a node normal turned over 90
-degrees from the reference one; a sphere in unbounded shear folds at Ca ~ 1; README,
-"Stability of deformable cells").
+degrees from the reference one; a sphere in unbounded shear folds at Ca ~ 1; docs/deformation.md
+(the step's guards).
 """
 
 from __future__ import annotations

@@ -22,7 +22,7 @@ to theirs. Above the wall both decay fast (a wall-parallel Stokeslet at height h
 h z / r^3 along the wall, Blake 1971; a force-free cell's stresslet faster): on an 8 x 8
 array of domes the largest error of the free cell's velocity over its crossing falls about as
 R^-4 with the cut-off R, to 1.2e-4 at ``DEFAULT_CUTOFF`` = 40 um, eight times inside 1e-3
-(``benchmarks/frozen.py``, README "Frozen adherent arrays").
+(``benchmarks/frozen.py``, docs/benchmarks.md "Frozen adherent arrays").
 
 The background flow at the free cells' points comes from the solved density through the
 treecode (``treecode.py``): the far field of the whole array at every leaf's Chebyshev points is

@@ -50,7 +50,7 @@ class SurfaceGeometry:
         # half the gap between bodies for the bilinear density; the constant density (the
         # scenes' and the traction's) keeps the whole gap: half of it took 2.5 times the time of
         # the recruitment scene's steps (adherent cells re-refined as a free cell passes) for
-        # squeeze errors that are the constant density's anyway (README stability map)
+        # squeeze errors that are the constant density's anyway (docs/benchmarks.md, stability map)
         nodes, unresolved, parents = refine_near_contact(nodes, wall, contact_refinement, wall_exempt=exempt,
                                                          body_gap_share=0.5 if density_order > 1 else 1.0)
         counts = [len(n) for n in nodes]

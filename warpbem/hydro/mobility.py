@@ -308,7 +308,7 @@ class MobilitySolver:
 
     def _warn_unresolved(self, geometry, length):
         """Warn once per contact (for the life of this solver) that is closer than the contact
-        refinement resolves (see refinement.refine_near_contact and the README stability map)."""
+        refinement resolves (see refinement.refine_near_contact and the docs/benchmarks.md, stability map)."""
         for (p, q), gap in sorted(geometry.unresolved_contacts.items()):
             if (p, q) in self._warned or (q, p) in self._warned:
                 continue
@@ -320,7 +320,7 @@ class MobilitySolver:
                 " the gap to another body (half of it with density_order 2), is under 2 % of the body's"
                 " element radius, or under three"
                 " element radii without refinement, or the refinement stopped at its deepest level."
-                " Squeeze-flow forces lose accuracy first, past about 1 % (README: stability map); a finer"
+                " Squeeze-flow forces lose accuracy first, past about 1 % (docs/benchmarks.md: stability map); a finer"
                 " mesh helps."
                 + (" In float32, GMRES stalls from about here: use dtype='float64'." if self.options.dtype == "float32" else ""),
                 ContactResolutionWarning, stacklevel=4)  # _warn_unresolved, _system, solve, the caller

@@ -18,7 +18,7 @@ from .treecode import TreecodeOptions
 
 OPERATOR_MODES = ("auto", "dense", "matrix_free", "treecode")
 # contact refinement ratio by density order when none is given (surfaces/refinement.py: the
-# ratio on the k = 4 sphere, scaled with the mesh): the Pareto chart's choice (README,
+# ratio on the k = 4 sphere, scaled with the mesh): the Pareto chart's choice (docs/benchmarks.md,
 # benchmarks/pareto.py)
 DEFAULT_CONTACT_REFINEMENT = {1: 3.0, 2: 1.1, 3: 1.1}
 # adaptive quadrature's near_factor by density order: a constant density's error hides the
@@ -31,7 +31,7 @@ NEAR_FACTOR = {1: 2.0, 2: 3.0, 3: 3.0}
 DEFAULT_TOLERANCE = {"float64": 1e-8, "float32": 1e-6}
 # m: adherent cells within this gap (between bounding spheres) of a free cell are solved with it
 # by the near-far split (frozen.py); the free cell's velocity then stays within 1.2e-4 of the full
-# solve on an 8 x 8 array of domes (benchmarks/frozen.py, README "Frozen adherent arrays"; 30 um:
+# solve on an 8 x 8 array of domes (benchmarks/frozen.py, docs/benchmarks.md "Frozen adherent arrays"; 30 um:
 # 3.5e-4, 20 um: 2e-3)
 DEFAULT_CUTOFF = 40e-6
 NEAR_FAR_SPLITS = ("auto", "on", "off")
@@ -90,7 +90,7 @@ class SolverOptions:
     density_order: int | None = option(
         None, "double-layer density per element: 1 constant (the seed's), 2 bilinear, 3 biquadratic. Default: 2"
         " for a solve (solve_mobility, MobilitySolver: below the constant density's cost-accuracy curve from"
-        " 0.01-0.05 s per solve, README 'Accuracy per cost'); 1 in time-stepped models and scenes, whose"
+        " 0.01-0.05 s per solve, docs/benchmarks.md 'Accuracy per cost'); 1 in time-stepped models and scenes, whose"
         " deformable cells' traction and surface motion are per element (1 only) and whose published figures"
         " were measured with it", kind=int, low=1, high=3)
     contact_refinement: float | None = option(
@@ -122,13 +122,13 @@ class SolverOptions:
                                  " heights: a cost linear in the cells, for free spherical cells tens of"
                                  " micrometres apart, leaving out the three-body part: 9.3e-4 of the flow's motion"
                                  " in a line 25 um apart, 7.5e-3 in a 3 x 3 patch, 1.2e-2 in a 4 x 4 one;"
-                                 " dynamics/pairwise.py, README 'Many adhesive cells')", choices=GRAND_MOBILITIES)
+                                 " dynamics/pairwise.py, docs/many-cells.md)", choices=GRAND_MOBILITIES)
     many_body: str = option("none", "with grand_mobility = 'pairs', 'coarse' adds the part the pairs leave out (three"
                             " cells and more) from coarse cells (the k = 2 sphere, 24 elements, unrefined): their"
                             " whole system's solve minus their pairs, kept on a lattice of many_body_lateral. 4 x 4"
                             " cells 25 um apart: 1.3e-4 / 1.7e-3 of the grand mobility / flow's motion against the"
                             " pairs' 1.7e-3 / 1.2e-2; 2 um between the cells: 4.2e-3 of the flow's against 1.9e-2"
-                            " (dynamics/many_body.py, README 'Many adhesive cells')",
+                            " (dynamics/many_body.py, docs/many-cells.md)",
                             choices=MANY_BODY_REMAINDERS)
     many_body_lateral: float = option(DEFAULT_MANY_BODY_LATERAL, "with many_body = 'coarse', the lateral lattice of"
                                       " the cells' positions the remainder is solved at", "m", low=0.0, high=1e-4,
@@ -144,7 +144,7 @@ class SolverOptions:
                                  f" off, or auto: on with at least {NEAR_FAR_FIXED_CELLS} fixed cells"
                                  " (benchmarks/frozen.py)", choices=NEAR_FAR_SPLITS)
     near_far_cutoff: float = option(DEFAULT_CUTOFF, "with the split, adherent cells whose bounding sphere stays"
-                                    " farther than this from every free cell's keep their background (README 'Frozen"
+                                    " farther than this from every free cell's keep their background (docs/benchmarks.md 'Frozen"
                                     " adherent arrays': the error against it)", "m", low=0.0, high=1e-2)
     treecode: TreecodeOptions = TreecodeOptions()  # the far field's settings (API only, not a scene key)
 

@@ -37,7 +37,7 @@ needs nothing of the kernel but its values, so the Blake (1971) wall images come
   integrals (adaptive, self terms: ``operators/treecode_form.py``), the points of a leaf sharing one
   list of near elements.
 
-The error of a product against the direct sum is tabulated over the tolerance in the README
+The error of a product against the direct sum is tabulated over the tolerance in docs/benchmarks.md
 ("Large arrays") and checked in ``tests/unit/test_treecode.py``: at or below the tolerance for
 the double layer; the point forces alone, whose far field is a larger share of their whole,
 up to a few times it. Singularities below the boxes do not occur: the wall images x* lie below
@@ -60,7 +60,7 @@ STRENGTHS = 12  # per source: 9 double-layer components (density (x) area vector
 # tolerance / CALIBRATION. The product's error sits well below that worst case (most of it is
 # near field; most far pairs are farther): CALIBRATION was set once so that the hardest array
 # tried, 11 x 11 spheres whose leaves are only as wide as the scene is high, stays below the
-# tolerance (4e-7 at 1e-6; 1e-7 on 8 x 8 and 16 x 16); the README ("Large arrays") reports the
+# tolerance (4e-7 at 1e-6; 1e-7 on 8 x 8 and 16 x 16); the docs/benchmarks.md ("Large arrays") reports the
 # error over the tolerance.
 CALIBRATION = 0.1
 MAX_POINTS = 14
@@ -74,7 +74,7 @@ RANK_SHARE = 0.1
 class TreecodeOptions:
     """tolerance: the one error parameter, the relative error of a product aimed at (the
     Chebyshev points per direction in each box follow from it and from the box's geometry,
-    ``FarField.points_per_direction``; measured errors: README "Large arrays"); near_field: "stored" (the exact near-field blocks assembled once
+    ``FarField.points_per_direction``; measured errors: docs/benchmarks.md "Large arrays"); near_field: "stored" (the exact near-field blocks assembled once
     and applied with BLAS), "recomputed" (their element integrals recomputed in every product,
     memory O(N) with a small constant), or "auto": stored while they take at most
     ``near_memory_fraction`` of the device's memory."""

@@ -72,7 +72,7 @@ class Mesh:
         return float(np.einsum("eqi,eqi->", positions, vector_weights) / 3.0)
 
     def centroid(self, order: int = 4) -> np.ndarray:
-        """Centre of volume, x_c = (1/2V) int |x|^2 n dS (divergence theorem on x |x|^2 / 2... per axis)."""
+        """Centre of volume, x_c = (1/2V) int ``|x|^2`` n dS (divergence theorem on x ``|x|^2`` / 2... per axis)."""
         positions, vector_weights = quad9.surface_quadrature(self.element_nodes(), order)
         # int_V x_i dV = (1/2) int_S x_i^2 n_i dS (no sum over i)
         moments = 0.5 * np.einsum("eqi,eqi->i", positions**2, vector_weights)

@@ -8,7 +8,7 @@ repeatedly up to ``max_levels`` times. The ratio is scaled with the body's own m
 (``relative_element_size`` against the k = 4 sphere's): a mesh twice as fine is refined twice
 as finely near contact, so the gap is resolved as the body is and the error near contact falls
 with the mesh instead of stopping at a floor a fixed ratio sets (``benchmarks/convergence.py``,
-README "Accuracy near contact"). The refined mesh has hanging nodes, which the collocation
+docs/validation.md "Accuracy near contact"). The refined mesh has hanging nodes, which the collocation
 methods do not mind: the density is discontinuous between elements and only the element
 integrals, areas and collocation points enter. The seed had no such refinement; its
 near-contact motion was "rough" (thesis ch. 3.3).
@@ -55,7 +55,7 @@ REFERENCE_ELEMENT_SIZE = 0.2755
 
 # refined meshes are reported unresolved where the resolved length (below) is under this
 # fraction of the body's own element radius: there the default scheme passes about 1 % error
-# (README stability map: on the k = 4 sphere, 0.0055 radius; the squeeze flow to the wall is 1.2 %
+# (docs/benchmarks.md, stability map: on the k = 4 sphere, 0.0055 radius; the squeeze flow to the wall is 1.2 %
 # off at a gap of 0.005 radius, two spheres 0.85 % at 0.02 and more below)
 WARN_FRACTION = 0.02
 
@@ -123,7 +123,7 @@ def refine_near_contact(element_nodes: list[np.ndarray], wall: bool, ratio: floa
     below WARN_FRACTION of p's own element radius or the rule still fails after ``max_levels``
     levels (6: the k = 4 sphere's elements end at 1/64 of their radius, and the element count,
     growing about as 1 / gap, stays bounded where the warning is given anyway); with ``ratio``
-    0, where an element is wider, in radius, than that length over ``warn_ratio``. README,
+    0, where an element is wider, in radius, than that length over ``warn_ratio``. docs/benchmarks.md,
     stability map.
     """
     meshes = [e.copy() for e in element_nodes]
