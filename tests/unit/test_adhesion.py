@@ -3,7 +3,10 @@ and Johnson's surface displacement, the per-cell reductions of eq. 4.3-4.4 again
 vector law of the implicit step, the formation rate of eq. 4.2 in the kernel against the
 formula, counter-based draws, and scene validation by field name."""
 
+import re
+
 import numpy as np
+
 import pytest
 
 import warpbem as wb
@@ -377,8 +380,8 @@ mesh = { shape = "sphere", radius = 2.0e-6, subdivisions = 2 }
     ("adhesion.ligand_density=-5.0", r"adhesion.ligand_density: -5 is outside"),
     ("adhesion.max_bonds=0", r"adhesion.max_bonds: 0 is outside"),
     ("adhesion.bogus=1", r"adhesion: unknown key 'bogus'"),
-    ("time.dt_min=1.0e-3", r"time.dt_min: 0.001 s is too long for the bond kinetics \(on_rate: k dt = 0.365 >"
-                           r" kinetics_fraction 0.1\); the allowed range is dt_min <= 0.000274"),
+    ("time.dt_min=1.0e-3", r"time.dt_min: 0.001 s is too long for the bond kinetics \(on_rate: k dt = 0.3650324292 >"
+                           r" kinetics_fraction 0.1\); the allowed range is dt_min <= 0.0002739482632 s"),
     ("bodies.0.poisson_ratio=0.5", r"bodies.0.poisson_ratio: 0.5 is outside the allowed range \(-1, 0.5\)"),
     ("bodies.0.shear_modulus=-1.0", r"bodies.0.shear_modulus: -1 is outside"),
     ("flow.wall=false", r"physics.adhesion: bonds form with ligands on the wall"),
@@ -390,6 +393,20 @@ def test_adhesion_scene_keys_are_checked_by_name(tmp_path, override, message):
     path = write(tmp_path, BONDS)
     with pytest.raises(scene.SceneError, match=message):
         scene.load(path, [override])
+
+
+def test_dt_min_at_the_kinetics_bound_is_accepted_and_beyond_it_refused_as_the_message_says(tmp_path):
+    """The bound k dt <= kinetics_fraction at its boundary (issue 26 item 6). With on_rate = 1e5 /s
+    the fastest formation (eq. 4.2 at its most favourable stretch) is a little over 1e5 /s, so
+    dt_min = 1e-6 s is refused; the message gives the bound to 10 digits (it gave "1e-06" before,
+    the value refused), and a dt_min written as that printed bound is accepted."""
+    path = write(tmp_path, BONDS)
+    fast = ["adhesion.on_rate=1.0e5"]
+    with pytest.raises(scene.SceneError, match=r"time.dt_min: 1e-06 s is too long .* dt_min <= ([0-9.e-]+) s$") as refused:
+        scene.load(path, fast + ["time.dt_min=1.0e-6"])
+    bound = re.search(r"dt_min <= ([0-9.e-]+) s$", str(refused.value)).group(1)
+    assert float(bound) < 1e-6
+    assert scene.load(path, fast + [f"time.dt_min={bound}"]).model.policy.dt_min == float(bound)
 
 
 def test_adhesion_scene_builds_the_interaction(tmp_path):

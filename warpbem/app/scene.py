@@ -36,6 +36,7 @@ from ..surfaces.placement import PlacementError, check_placement
 
 
 MESH_SHAPES = ("sphere", "spheroid", "file")
+BOUND_TOLERANCE = 1e-9  # relative: a range's boundary given in a scene file is inside it
 ADHESION_REUSE_TOLERANCE = 2e-9  # m: chosen from benchmarks/adhesion.py (docs/adhesion.md)
 
 class SceneError(ValueError):
@@ -318,12 +319,15 @@ def _adhesion(table, bodies, repulsion: Repulsion, dt_min: float, wall: bool) ->
     options = _options(BondOptions, table, "adhesion").resolved(repulsion.cell_roughness, repulsion.wall_roughness)
     adhesion = Adhesion(options, adhesive=[b.adhesive for b in bodies], shear_modulus=[b.shear_modulus for b in bodies],
                         poisson_ratio=[b.poisson_ratio for b in bodies], ligand_bodies=[b.ligands for b in bodies])
-    # the step is bounded by the kinetics, k dt <= kinetics_fraction; dt_min must allow it
+    # the step is bounded by the kinetics, k dt <= kinetics_fraction; dt_min must allow it. The
+    # bound is compared, and printed, to 1e-9 of itself, so that a dt_min written as the bound
+    # (on_rate = 1e5 /s, dt_min = 1e-6 s) is not refused by the round-off of kinetics_fraction / rate
     for name, rate in (("on_rate", adhesion.fastest_formation), ("off_rate", adhesion.off_rate)):
-        if rate * dt_min > adhesion.kinetics_fraction:
-            raise SceneError(f"time.dt_min: {dt_min:g} s is too long for the bond kinetics ({name}: k dt ="
-                             f" {rate * dt_min:.3g} > kinetics_fraction {adhesion.kinetics_fraction:g}); the"
-                             f" allowed range is dt_min <= {adhesion.kinetics_fraction / rate:.3g} s")
+        longest = adhesion.kinetics_fraction / rate if rate > 0 else float("inf")
+        if dt_min > longest * (1 + BOUND_TOLERANCE):
+            raise SceneError(f"time.dt_min: {dt_min:.10g} s is too long for the bond kinetics ({name}: k dt ="
+                             f" {rate * dt_min:.10g} > kinetics_fraction {adhesion.kinetics_fraction:g}); the"
+                             f" allowed range is dt_min <= {longest:.10g} s")
     return adhesion
 
 
