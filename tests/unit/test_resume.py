@@ -2,15 +2,23 @@
 (also when the process died between two column writes) and reproduces the uninterrupted run;
 a resumed run may be extended, but not changed; sweeps resume point by point."""
 
+import contextlib
 import csv
 import json
 import multiprocessing
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import time
 
 import h5py
 import numpy as np
 import pytest
 
 from warpbem.app import cli, run, scene, sweep
+from warpbem.app.io import complete_rows, open_result
 
 from tests.interrupted import run_killed_after
 
@@ -115,3 +123,68 @@ def test_a_run_missing_a_column_of_this_version_is_refused_by_name(tmp_path):
         del f["closest_gap"]
     with pytest.raises(run.RunFileError, match="no column 'closest_gap' that this version of warpbem writes"):
         run.run(None, out, resume=True, progress=lambda line: None)
+
+
+def frames(path):
+    """The frames complete in a run file that another process may be writing (0 until readable)."""
+    with contextlib.suppress(OSError, KeyError):
+        with h5py.File(path, "r", locking=False) as f:
+            return complete_rows(f)
+    return 0
+
+
+def children(pid):
+    """The processes whose parent is ``pid`` (Linux /proc)."""
+    found = []
+    for stat in pathlib.Path("/proc").glob("[0-9]*/stat"):
+        with contextlib.suppress(OSError, IndexError, ValueError):
+            if int(stat.read_text().rsplit(")", 1)[1].split()[1]) == pid:
+                found.append(int(stat.parent.name))
+    return found
+
+
+def alive(pid):
+    """Whether ``pid`` runs (a zombie, dead but not yet reaped, does not)."""
+    with contextlib.suppress(OSError):
+        return pathlib.Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_sigterm_to_a_sweep_ends_its_workers_and_the_sweep_resumes(tmp_path):
+    """Issue 26 item 6: SIGTERM to ``warpbem sweep`` (killing its process, as a batch system
+    does) interrupts its worker processes, none is left running, the command exits 130, and the
+    interrupted points' files resume. Before, the workers ran on after their sweep had died."""
+    long_run = dict(BASE, physics={}, flow={"shear_rate": 10.0, "viscosity": 1e-3},
+                    time={"end": 400.0, "dt_max": 0.2, "dt_min": 0.05, "contact_gap": 1e-6})
+    path = write(tmp_path, long_run)
+    folder = tmp_path / "sweep"
+    command = [sys.executable, "-c", "import sys; from warpbem.app.cli import main; sys.exit(main(sys.argv[1:]))",
+               "sweep", str(path), "--vary", "flow.viscosity=1e-3,2e-3", "--output-dir", str(folder),
+               "--workers", "2"]
+    sweeping = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    points = [folder / "point000.h5", folder / "point001.h5"]
+    try:
+        deadline = time.monotonic() + 240
+        while time.monotonic() < deadline and not all(p.exists() and frames(p) >= 2 for p in points):
+            time.sleep(0.5)
+        workers = children(sweeping.pid)
+        assert len(workers) >= 2, "the sweep's workers did not start"
+        sweeping.send_signal(signal.SIGTERM)
+        _, err = sweeping.communicate(timeout=120)
+    finally:  # never leave this test's processes behind, whatever failed
+        for pid in children(sweeping.pid):
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+        sweeping.kill()
+    assert sweeping.returncode == 130 and "the same command resumes the sweep" in err, err
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and any(alive(pid) for pid in workers):
+        time.sleep(0.2)
+    assert not any(alive(pid) for pid in workers), "workers left running after their sweep ended"
+    for point in points:  # each interrupted file resumes (here to a nearer end)
+        with open_result(point) as f:
+            last = float(f["time"][complete_rows(f) - 1])
+        assert last < 400.0
+        resumed = run.run(None, point, [f"time.end={last + 0.4}"], resume=True, progress=lambda line: None)
+        assert resumed.time == pytest.approx(last + 0.4)

@@ -26,10 +26,16 @@ next resume) and start no other.
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import ctypes
 import itertools
 import json
 import multiprocessing
+import os
+import signal
+import sys
+import threading
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -120,6 +126,15 @@ def _run_point(args):
     return row, {"complete": "kept", "partial": "resumed", "missing": "ran"}[status]
 
 
+def _run_point_in_worker(args):
+    """``_run_point`` in a worker process, which ends when interrupted: the pool's worker loop
+    would otherwise report the interruption and take the next point."""
+    try:
+        return _run_point(args)
+    except KeyboardInterrupt:
+        os._exit(130)  # the run file is closed by then (its with-block has exited)
+
+
 def _failed(i, job, err) -> SweepError:
     return SweepError(f"point{i:03d} ({', '.join(job[3])}) failed: {type(err).__name__}: {err}")
 
@@ -203,21 +218,72 @@ def sweep(scene_path, varies, output_dir, device="cpu", workers=1, progress=prin
     return summary
 
 
+# seconds an interrupted worker has to close its run file before it is terminated
+WORKER_GRACE = 10.0
+PR_SET_PDEATHSIG = 1  # linux/prctl.h
+
+
+def _worker_init():
+    """A worker is interrupted (SIGINT, as by Ctrl-C) when its sweep process dies, however it
+    dies (Linux's parent-death signal): a killed sweep leaves no worker running on its own."""
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGINT))
+
+
+@contextlib.contextmanager
+def _terminate_as_interrupt():
+    """SIGTERM to the sweep raises KeyboardInterrupt, so that its workers are stopped as on
+    Ctrl-C (signals can be set from the main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt(f"signal {signum}")
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _stop_workers(pool):
+    """Interrupt the pool's workers (SIGINT: a run closes its HDF5 file, whose complete frames a
+    later sweep resumes from) and terminate those still alive after WORKER_GRACE seconds."""
+    # ProcessPoolExecutor lists its processes nowhere public
+    processes = [p for p in dict(getattr(pool, "_processes", None) or {}).values() if p.is_alive()]
+    for p in processes:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(p.pid, signal.SIGINT)
+    for p in processes:
+        p.join(WORKER_GRACE)
+        if p.is_alive():
+            p.terminate()
+            p.join()
+
+
 def _in_processes(jobs, workers, progress) -> list[dict]:
     """The points' rows in grid order from local worker processes (fresh interpreters, spawn:
     Warp's runtime is not safe to fork once initialised). On a failure the pending points are
-    cancelled and the pool shut down once the running ones finish (their files are complete)."""
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
-    try:
-        futures = [pool.submit(_run_point, job) for job in jobs]
-        rows = []
-        for i, future in enumerate(futures):
-            try:
-                row, what = future.result()
-            except Exception as err:
-                raise _failed(i, jobs[i], err) from err
-            rows.append(row)
-            progress(_line(i + 1, len(jobs), row, what))
-        return rows
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+    cancelled and the pool shut down once the running ones finish (their files are complete).
+    On Ctrl-C or SIGTERM the workers are interrupted too, and the same command resumes."""
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=_worker_init)
+    with _terminate_as_interrupt():
+        try:
+            futures = [pool.submit(_run_point_in_worker, job) for job in jobs]
+            rows = []
+            for i, future in enumerate(futures):
+                try:
+                    row, what = future.result()
+                except Exception as err:
+                    raise _failed(i, jobs[i], err) from err
+                rows.append(row)
+                progress(_line(i + 1, len(jobs), row, what))
+            return rows
+        except KeyboardInterrupt:
+            _stop_workers(pool)
+            raise
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
