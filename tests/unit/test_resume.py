@@ -87,6 +87,7 @@ def test_a_sweep_resumes_point_by_point(tmp_path):
     lines = []
     sweep.sweep(path, varies, folder, progress=lines.append)
     assert [line.split()[1] for line in lines] == ["kept", "resumed"]
+    assert lines[0].startswith("[1/2]") and " ETA " in lines[0] and " ETA " not in lines[1]  # done / total, ETA
     assert (folder / "point000.h5").stat().st_mtime_ns == kept
     with h5py.File(folder / "point001.h5") as f:
         assert f["time"][:].tolist() == pytest.approx([0.0, 0.2, 0.4, 0.6])

@@ -36,6 +36,7 @@ import os
 import signal
 import sys
 import threading
+import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -139,12 +140,16 @@ def _failed(i, job, err) -> SweepError:
     return SweepError(f"point{i:03d} ({', '.join(job[3])}) failed: {type(err).__name__}: {err}")
 
 
-def _line(done, total, row, what) -> str:
+def _line(done, total, row, what, started) -> str:
+    """A point's progress line: done / total, the point, and the ETA from the time per point so
+    far (``started``: the sweep's time.monotonic() at its start)."""
+    eta = (time.monotonic() - started) / done * (total - done)
     return f"[{done}/{total}] {what} {row['file']}: " + ", ".join(
-        f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}" for k, v in row.items() if k != "file")
+        f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}" for k, v in row.items() if k != "file") + (
+        f"  ETA {eta / 60:.1f} min" if done < total else "")
 
 
-def _on_cluster(jobs, scheduler, progress) -> list[dict]:
+def _on_cluster(jobs, scheduler, progress, started) -> list[dict]:
     """The points' rows in grid order, run as tasks on a Dask cluster; a progress line as each
     finishes. ``scheduler``: an address, or a ``distributed.Client`` (left open)."""
     try:
@@ -171,7 +176,7 @@ def _on_cluster(jobs, scheduler, progress) -> list[dict]:
                 raise SweepError(f"point{i:03d} ({', '.join(jobs[i][3])}) failed on the cluster:"
                                  f" {type(err).__name__}: {err}") from err
             rows[i] = {**row, "file": str(jobs[i][1])}  # the file named as a local sweep names it
-            progress(_line(done, len(jobs), rows[i], what))
+            progress(_line(done, len(jobs), rows[i], what, started))
     finally:
         client.cancel(list(futures))  # nothing left running on the cluster after an error or interrupt
         if own:
@@ -197,8 +202,9 @@ def sweep(scene_path, varies, output_dir, device="cpu", workers=1, progress=prin
         if not overwrite:
             point_status(job[1], scene)
     output_dir.mkdir(parents=True, exist_ok=True)
+    started = time.monotonic()
     if scheduler is not None:
-        rows = _on_cluster(jobs, scheduler, progress)
+        rows = _on_cluster(jobs, scheduler, progress, started)
     elif workers <= 1:
         rows = []
         for i, job in enumerate(jobs):
@@ -207,9 +213,9 @@ def sweep(scene_path, varies, output_dir, device="cpu", workers=1, progress=prin
             except Exception as err:
                 raise _failed(i, job, err) from err
             rows.append(row)
-            progress(_line(i + 1, len(jobs), row, what))
+            progress(_line(i + 1, len(jobs), row, what, started))
     else:
-        rows = _in_processes(jobs, workers, progress)
+        rows = _in_processes(jobs, workers, progress, started)
     summary = output_dir / "summary.csv"
     with summary.open("w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
@@ -263,7 +269,7 @@ def _stop_workers(pool):
             p.join()
 
 
-def _in_processes(jobs, workers, progress) -> list[dict]:
+def _in_processes(jobs, workers, progress, started) -> list[dict]:
     """The points' rows in grid order from local worker processes (fresh interpreters, spawn:
     Warp's runtime is not safe to fork once initialised). On a failure the pending points are
     cancelled and the pool shut down once the running ones finish (their files are complete).
@@ -280,7 +286,7 @@ def _in_processes(jobs, workers, progress) -> list[dict]:
                 except Exception as err:
                     raise _failed(i, jobs[i], err) from err
                 rows.append(row)
-                progress(_line(i + 1, len(jobs), row, what))
+                progress(_line(i + 1, len(jobs), row, what, started))
             return rows
         except KeyboardInterrupt:
             _stop_workers(pool)
