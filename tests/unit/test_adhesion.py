@@ -402,7 +402,8 @@ def test_dt_min_at_the_kinetics_bound_is_accepted_and_beyond_it_refused_as_the_m
     the value refused), and a dt_min written as that printed bound is accepted."""
     path = write(tmp_path, BONDS)
     fast = ["adhesion.on_rate=1.0e5"]
-    with pytest.raises(scene.SceneError, match=r"time.dt_min: 1e-06 s is too long .* dt_min <= ([0-9.e-]+) s$") as refused:
+    refusal = r"time.dt_min: 1e-06 s is too long .* dt_min <= ([0-9.e-]+) s$"
+    with pytest.raises(scene.SceneError, match=refusal) as refused:
         scene.load(path, fast + ["time.dt_min=1.0e-6"])
     bound = re.search(r"dt_min <= ([0-9.e-]+) s$", str(refused.value)).group(1)
     assert float(bound) < 1e-6
