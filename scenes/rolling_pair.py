@@ -3,6 +3,9 @@ J. 81:799), e.g.
 
     warpbem sweep scenes/rolling_pair.toml --output-dir results/rolling_pair --workers 2
     python scenes/rolling_pair.py results/rolling_pair [more sweep folders, e.g. other seeds]
+    python scenes/rolling_pair.py docs/figures/rolling_pair.csv results/rolling_pair_seeds34
+
+(a .csv argument: the rows of a table this script wrote before, for runs whose files are gone)
 
 writes results/rolling_pair.csv (per run and cell: arrangement, spacing, velocity, pauses,
 lateral drift, bonds) and docs/figures/rolling_pair.png (mean rolling velocity, mean pause
@@ -20,6 +23,7 @@ Measures, per cell, from its first bond to the end of the run (frames every 1 ms
 
 from __future__ import annotations
 
+import csv
 import sys
 from pathlib import Path
 
@@ -77,6 +81,15 @@ def table(folders: list[Path]) -> list[dict]:
     return rows
 
 
+def earlier(path: Path) -> list[dict]:
+    """The rows of a table this script wrote before, with its numbers as numbers."""
+    def value(key, text):
+        return text if key in ("run", "arrangement") else int(text) if key in ("seed", "cell", "pauses") else float(text)
+
+    with path.open(newline="") as f:
+        return [{k: value(k, v) for k, v in row.items()} for row in csv.DictReader(f)]
+
+
 def chart(rows: list[dict], out: Path) -> Path:
     plt = _pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(13, 4))
@@ -109,8 +122,10 @@ def chart(rows: list[dict], out: Path) -> Path:
 
 
 def main():
-    folders = sweep_folders(sys.argv[1:], "rolling_pair")
-    rows = table(folders)
+    tables = [Path(a) for a in sys.argv[1:] if a.endswith(".csv")]
+    folders = sweep_folders([a for a in sys.argv[1:] if not a.endswith(".csv")], "rolling_pair") if (
+        len(tables) < len(sys.argv[1:]) or not tables) else []
+    rows = [row for path in tables for row in earlier(path)] + table(folders)
     if not rows:
         print(f"{', '.join(map(str, folders))}: no runs (see this script's docstring)")
         return
