@@ -1,5 +1,6 @@
 """Command line: ``warpbem demo`` runs the default scene, ``warpbem run`` / ``sweep`` run scene
-files, ``warpbem plot`` charts a result, ``warpbem xdmf`` writes a run's moving meshes for ParaView.
+files, ``warpbem plot`` charts a result, ``warpbem xdmf`` writes a run's moving meshes for ParaView,
+``warpbem animate`` a GIF of a run.
 
 A file that is missing, unreadable or not what the command needs, and a scene that does not
 validate, end the command with one line on stderr naming the file or field (exit status 2);
@@ -47,6 +48,11 @@ def _parser() -> argparse.ArgumentParser:
     plot.add_argument("--png", default=None, help="output PNG (default: beside the HDF5 file)")
     xdmf = sub.add_parser("xdmf", help="write RUN.xdmf (+ RUN.xdmf.h5) beside a run: its meshes moving, for ParaView")
     xdmf.add_argument("run", help="HDF5 file written by warpbem run or warpbem sweep (only read)")
+    animate = sub.add_parser("animate", help="write an animated GIF of a run: side and top views to scale, bonds, time")
+    animate.add_argument("run", help="HDF5 file written by warpbem run or warpbem sweep (only read)")
+    animate.add_argument("--output", default=None, help="output GIF (default: beside the run file)")
+    animate.add_argument("--frames", type=int, default=200, help="frames at most, spread evenly (default %(default)s)")
+    animate.add_argument("--fps", type=float, default=10.0, help="GIF frames per second (default %(default)s)")
     return parser
 
 
@@ -118,7 +124,16 @@ def _xdmf(args, parser):
     return 0
 
 
-VERBS = {"demo": _demo, "run": _run, "sweep": _sweep, "plot": _plot, "xdmf": _xdmf}
+def _animate(args, parser):
+    from .animate import animate
+
+    if args.frames < 1 or args.fps <= 0:
+        parser.error("--frames must be at least 1 and --fps positive")
+    print(f"gif: {animate(args.run, args.output, args.frames, args.fps)}")
+    return 0
+
+
+VERBS = {"demo": _demo, "run": _run, "sweep": _sweep, "plot": _plot, "xdmf": _xdmf, "animate": _animate}
 
 
 def main(argv=None) -> int:
