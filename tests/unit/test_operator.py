@@ -82,6 +82,26 @@ def test_cpu_row_split_is_deterministic(monkeypatch, rng):
     np.testing.assert_allclose(results[1], results[0], rtol=0, atol=1e-12 * np.abs(q).sum())
 
 
+def test_blas_runs_one_thread_beside_the_cpu_thread_pool_and_every_core_for_large_factors(monkeypatch):
+    """kernels/launch.py: after a threaded CPU launch BLAS keeps one thread (its spinning threads
+    would take cores from the launches); a factorization of BLAS_ALL_CORES_ROWS rows or more
+    gets every core inside ``blas_on_all_cores``, a smaller one does not."""
+    threadpoolctl = pytest.importorskip("threadpoolctl")
+    monkeypatch.setattr(launch, "cpu_threads", lambda: 2)
+
+    def blas_threads():
+        return {info["num_threads"] for info in threadpoolctl.threadpool_info() if info["user_api"] == "blas"}
+
+    op = make_operator(two_spheres_near_wall(), True, "matrix_free")
+    op.matvec(np.ones(op.size))  # launches through launch_rows
+    assert blas_threads() == {1}
+    with launch.blas_on_all_cores(launch.BLAS_ALL_CORES_ROWS):
+        assert blas_threads() == {2}
+    assert blas_threads() == {1}
+    with launch.blas_on_all_cores(launch.BLAS_ALL_CORES_ROWS - 1):
+        assert blas_threads() == {1}
+
+
 def _block(op, row_body, col_body):
     a0, a1 = op.geometry.body_ranges[row_body]
     b0, b1 = op.geometry.body_ranges[col_body]

@@ -47,6 +47,7 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse.linalg as spla
 
+from ..kernels.launch import blas_on_all_cores
 from .block_factors import BlockFactors, block_key
 from .deflated import RigidModes, deflated_operator
 from .geometry import SurfaceGeometry
@@ -251,6 +252,12 @@ class CompletedDoubleLayer:
         matrix += (added - matrix @ modes) @ weighted
         return matrix
 
+    @staticmethod
+    def _factor(block: np.ndarray):
+        """A body block's LU factors, on every core when the block is large (kernels/launch.py)."""
+        with blas_on_all_cores(len(block)):
+            return scipy.linalg.lu_factor(block, check_finite=False)
+
     def preconditioner(self, previous: "CompletedDoubleLayer | None", kept_for_later: bool = True,
                        every_body: bool = False, factors: BlockFactors | None = None) -> spla.LinearOperator:
         """Block Jacobi: the exact inverse of each body's own block (LU), kept for bodies that
@@ -282,7 +289,7 @@ class CompletedDoubleLayer:
         stored = {p: found for p, key in keys.items() if (found := factors.get(key)) is not None}
         blocks = self.double_layer.diagonal_blocks([p for p in needed if p not in stored])
         self.factors = [old[p] if kept[p] else stored[p] if p in stored else
-                        scipy.linalg.lu_factor(self.body_block(p, blocks[p]), check_finite=False) if p in blocks else None
+                        self._factor(self.body_block(p, blocks[p])) if p in blocks else None
                         for p in range(len(self.ranges))]
         for p, key in keys.items():
             if p not in stored:

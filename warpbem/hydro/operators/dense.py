@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...kernels import integrals
+from ...kernels.launch import blas_on_all_cores
 from .description import IDENTITY_KINDS, BoundaryOperator
 from .discrete import DiscreteOperator
 from .kept_blocks import KeptBlocks, new_buffer, square
@@ -81,7 +82,8 @@ class DenseOperator(DiscreteOperator):
             # row 3a + j, component i: sum over the body's elements b of (I_ab)_ji, the zero self block
             # included; as a product with stacked identities, so BLAS does it (a strided reduction
             # took as long as the whole threaded assembly of a refined sphere)
-            row_sums = (block @ np.tile(np.eye(3, dtype=block.dtype), (n, 1))).reshape(n, 3, 3)
+            with blas_on_all_cores(len(block)):
+                row_sums = (block @ np.tile(np.eye(3, dtype=block.dtype), (n, 1))).reshape(n, 3, 3)
             a, k = np.arange(n)[:, None, None], np.arange(3)
             block[3 * a + k[None, :, None], 3 * a + k[None, None, :]] = -row_sums
 
@@ -101,7 +103,8 @@ class DenseOperator(DiscreteOperator):
         density = np.asarray(density, dtype=self.np_dtype)
         matrix = self.matrix()
         if self.device.is_cpu:
-            return np.asarray(matrix.numpy() @ density, dtype=np.float64)
+            with blas_on_all_cores(self.size):  # memory-bound: two cores read faster than one
+                return np.asarray(matrix.numpy() @ density, dtype=np.float64)
         return self.device_matvec(density).numpy().astype(np.float64)
 
     def device_matvec(self, density):
