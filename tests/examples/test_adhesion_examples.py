@@ -3,9 +3,10 @@
 
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
 
 from tests.examples.test_examples import example
-from tests.verification.sphere_wall_series import free_sphere_in_shear
+from tests.verification.sphere_wall_series import brenner_lambda, free_sphere_in_shear
 
 # scenes/fig4_09_11_soft_bonds.toml (thesis Table 4.1, fig. 4.9's cell), written out here so that
 # the expectations do not come from the code under test
@@ -38,3 +39,34 @@ def test_rolling_cell(tmp_path, capsys):
     hertz_area = np.pi * (3 * frames["contact_force"] * RADIUS / (4 * e_star)) ** (2 / 3)
     np.testing.assert_allclose(frames["contact_area"], hertz_area, rtol=5e-4, atol=0)
     assert frames["contact_area"][-1] > 0 and frames["contact_force"][-1] > 0
+
+
+def brenner_descent(density_difference, end, height=7.5e-6, radius=5e-6, viscosity=1.2e-3, g=9.80665):
+    """dz (m) of a sphere settling from ``height`` for ``end`` s under its buoyant weight
+    (4/3) pi a^3 drho g, at dz/dt = -F / (6 pi mu a lambda(z / a)), lambda Brenner's (1961)
+    exact wall correction (tests/verification/sphere_wall_series.py), integrated to 1e-12."""
+    force = 4 / 3 * np.pi * radius**3 * density_difference * g
+    path = solve_ivp(lambda t, z: [-force / (6 * np.pi * viscosity * radius * brenner_lambda(z[0] / radius))],
+                     (0.0, end), [height], rtol=1e-12, atol=1e-20)
+    return path.y[0, -1] - height
+
+
+def test_sweep_on_dask(tmp_path, capsys):
+    """Two points on a local Dask cluster (two spawned worker processes): a 5 um cell settling
+    7.5 um above the wall in still plasma, in fluids of 1000 and 1025 kg/m^3. Each descent is
+    Brenner's (1961) exact wall-corrected Stokes settling integrated over the run (the k = 3 mesh
+    errs by +8e-4 at h/a = 1.5; 2e-3 allowed), and their ratio is the buoyancy ratio 50 / 25 = 2 to
+    the change of lambda over the descent (the Brenner ratio 1.99906 to 1e-4; 2 to 1e-3)."""
+    ex = example("sweep_on_dask")
+    end = 0.01
+    rows = ex.main(tmp_path, end=end, subdivisions=3)
+    out = capsys.readouterr().out
+    assert "W ratio" in out and (tmp_path / "summary.csv").exists()
+    assert (tmp_path / "settling.png").stat().st_size > 10_000
+    assert [float(r["physics.fluid_density"]) for r in rows] == [1000.0, 1025.0]
+    dz = [float(r["free_dz_m"]) for r in rows]
+    expected = [brenner_descent(50.0, end), brenner_descent(25.0, end)]  # -7.075 and -3.539 nm
+    assert dz == pytest.approx(expected, rel=2e-3)
+    assert dz[0] / dz[1] == pytest.approx(expected[0] / expected[1], rel=1e-4)
+    assert dz[0] / dz[1] == pytest.approx(2.0, rel=1e-3)
+    assert [r["settling_velocity"] for r in rows] == pytest.approx([-d / end for d in dz], rel=1e-12)
