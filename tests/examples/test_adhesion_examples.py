@@ -17,7 +17,7 @@ SHEAR_MODULUS, POISSON_RATIO = 4e3, 0.33                 # Pa, 1
 def test_rolling_cell(tmp_path, capsys):
     """Before any bond the cell moves as a free sphere at h/a = 1.048: U = X gdot h with X from
     the exact series of Goldman, Cox & Brenner (1967b) (tests/verification/sphere_wall_series.py;
-    the collocation at a gap of 0.048 a errs by +1.4 % with k = 2, +1.0 % with k = 3 and +0.7 % with
+    the collocation at a gap of 0.048 a errs by +1.4 % with k = 2, +1.0 % with k = 3 and +0.8 % with
     k = 4); bonds then form and slow it well below that; its contact area is the Hertz disc
     pi a_s^2, a_s = (3 F R / 4 E*)^(1/3), E* = 2 G (1 + nu) / (1 - nu^2) (thesis eq. 4.9) of the
     frame's normal bond force F."""
