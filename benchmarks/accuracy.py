@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 import warpbem as wb
+from warpbem.app.progress import Progress
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "verification"))
 import sphere_wall_series as series  # noqa: E402  (the reference implementation of the tests)
@@ -67,12 +68,15 @@ def main():
     header = "| config | h/a | points | " + " | ".join(keys) + " | GMRES its | s/solve |"
     print(header)
     print("|" + "---|" * (len(keys) + 5))
+    # progress on stderr: the table on stdout stays one markdown table
+    progress = Progress(len(CONFIGS) * len(args.heights), lambda line: print(line, file=sys.stderr, flush=True))
     for name, (k, p, ratio) in CONFIGS.items():
         mesh = wb.mesh.sphere(1.0, k)
         for h in args.heights:
             e = errors_at(mesh, h, ratio, p)
             cells = " | ".join(f"{e[key]:+.1e}" for key in keys)
             print(f"| {name} | {h} | {e['elements']} | {cells} | {e['iterations']} | {e['time']:.2f} |", flush=True)
+            progress.done(f"{name}, h/a = {h}")
 
 
 if __name__ == "__main__":

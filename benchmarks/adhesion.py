@@ -29,6 +29,7 @@ import numpy as np
 
 import warpbem as wb
 from common import arguments, output, print_table, pyplot, save_chart, write_csv
+from warpbem.app.progress import Progress
 from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy, build_solver
 from warpbem.dynamics.simulator import Simulator
 from warpbem.forces.adhesion import Adhesion
@@ -48,7 +49,7 @@ TABLE_4_1 = dict(receptor_density=20e12, spring_constant=5e-4, equilibrium_lengt
 def kernel_throughput(device, sizes):
     """Bonds per second of the bond loads and of one kinetics pass, and one solve's time."""
     mesh = wb.mesh.sphere(A, 2)
-    rows = []
+    rows, progress = [], Progress(len(sizes))
     for cells, cap in sizes:
         meshes = [mesh] * cells
         positions = np.array([[30e-6 * (i % 32), 30e-6 * (i // 32), REST] for i in range(cells)])
@@ -81,6 +82,7 @@ def kernel_throughput(device, sizes):
         n = cells * cap
         rows.append(dict(cells=cells, bonds=n, receptors=len(adh.tips), loads_s=t_loads, loads_bonds_per_s=n / t_loads,
                          kinetics_s=t_kin, kinetics_receptors_per_s=len(adh.tips) / t_kin))
+        progress.done(f"bond kernels: {cells} cells, {n} bonds")
     solver = build_solver(SolverOptions(), Flow(100.0, 1e-3), device)
     solver.reuse = False  # from scratch: no kept blocks, no warm start
     mesh4 = wb.mesh.sphere(A, 4)
@@ -122,7 +124,10 @@ def roll(model, state, end, device):
 
 
 def reuse_chart(device, tolerances, end):
-    runs = {d: roll(*rolling_model(reuse=d), end, device) for d in [0.0] + tolerances}
+    runs, progress = {}, Progress(1 + len(tolerances))
+    for d in [0.0] + tolerances:
+        runs[d] = roll(*rolling_model(reuse=d), end, device)
+        progress.done(f"reuse {d * 1e9:g} nm: {runs[d]['wall']:.1f} s")
     ref = runs[0.0]
     rows = []
     for d, r in runs.items():
@@ -150,12 +155,13 @@ def lateral_error(device, spacing, shifts):
         return grand, np.concatenate([flow.velocity.ravel(), flow.angular_velocity.ravel() * A])
 
     grand0, flow0 = mobility(0.0)
-    rows = []
+    rows, progress = [], Progress(len(shifts))
     for shift in shifts:
         grand, flow = mobility(shift)
         rows.append(dict(spacing_um=spacing * 1e6, shift_nm=shift * 1e9,
                          grand_mobility_change=np.abs(grand - grand0).max() / np.abs(grand0).max(),
                          flow_motion_change=np.abs(flow - flow0).max() / np.abs(flow0).max()))
+        progress.done(f"lateral shift {shift * 1e9:g} nm")
     return rows
 
 
@@ -174,7 +180,7 @@ def interaction_error(device, spacing, lattices, fine=0.5e-9):
     def change(a, b):  # of the grand mobility and of the motion in the flow
         return [np.abs(x - y).max() / np.abs(y).max() for x, y in zip(a, b)]
 
-    rows = []
+    rows, progress = [], Progress(2 * len(lattices))
     for lattice in lattices:
         model = Model([mesh, mesh], [False, False], Flow(100.0, 1e-3),
                       solver=SolverOptions(reuse_tolerance=fine, reuse_lateral=spacing / 8, reuse_interaction=lattice))
@@ -191,13 +197,17 @@ def interaction_error(device, spacing, lattices, fine=0.5e-9):
             rows.append(dict(lattice_nm=lattice * 1e9, heights=name, grand_split=grand_split,
                              grand_interaction_only=grand_coarse, flow_split=flow_split,
                              flow_interaction_only=flow_coarse))
+            progress.done(f"height lattice {lattice * 1e9:g} nm, heights {name}")
     return rows
 
 
 def step_chart(device, fractions, seeds, end):
-    rows = []
+    rows, progress = [], Progress(len(fractions) * seeds)
     for f in fractions:
-        runs = [roll(*rolling_model(fraction=f, seed=s, dt_max=1.0), end, device) for s in range(seeds)]
+        runs = []
+        for s in range(seeds):
+            runs.append(roll(*rolling_model(fraction=f, seed=s, dt_max=1.0), end, device))
+            progress.done(f"kinetics fraction {f:g}, seed {s}: {runs[-1]['wall']:.1f} s")
         rolled = np.array([r["x"][0] for r in runs]) * 1e6
         bonds = np.array([r["bonds"][-1] for r in runs])
         rows.append(dict(kinetics_fraction=f, dt_s=np.mean([np.diff(r["t"]).mean() for r in runs]),
@@ -212,13 +222,14 @@ def step_chart(device, fractions, seeds, end):
 
 
 def speed(device, end, cells):
-    rows = []
+    rows, progress = [], Progress(len(cells))
     for n in cells:
         model, state = rolling_model(k=4, reuse=2e-9, fraction=0.1, dt_max=1.0, cells=n)
         r = roll(model, state, end, device)
         rows.append(dict(cells=n, simulated_s=end, wall_s=r["wall"], wall_per_simulated_s=r["wall"] / end,
                          steps=r["steps"], snapshots=r["snapshots"], mean_velocity_um_s=r["x"].mean() / end * 1e6,
                          bonds_end=int(r["bonds"][-1])))
+        progress.done(f"{n} cells: {r['wall']:.1f} s")
     return rows
 
 

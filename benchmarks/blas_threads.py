@@ -24,6 +24,7 @@ import warpbem as wb
 from common import print_table, pyplot, save_chart, write_csv, output
 from warpbem.hydro.geometry import SurfaceGeometry
 from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions
+from warpbem.app.progress import Progress
 from warpbem.kernels import launch
 
 
@@ -63,7 +64,7 @@ def main():
     for run in workloads.values():
         run()  # compile the kernels and start the thread pool (which limits BLAS) outside the timings
     times = {(w, s): [] for w in workloads for s in settings}
-    started, total = time.monotonic(), args.repeats * len(workloads)
+    progress = Progress(args.repeats * len(workloads))
     for repeat in range(args.repeats):
         for name, run in workloads.items():
             for setting, limit in settings.items():
@@ -71,9 +72,7 @@ def main():
                     t = time.perf_counter()
                     run()
                     times[name, setting].append(time.perf_counter() - t)
-            done = repeat * len(workloads) + list(workloads).index(name) + 1
-            eta = (time.monotonic() - started) / done * (total - done)
-            print(f"[{done}/{total}] {name}  ETA {eta:.0f} s", flush=True)
+            progress.done(name)
     rows = []
     for (name, setting), t in times.items():
         t = np.array(t)

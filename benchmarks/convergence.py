@@ -25,6 +25,7 @@ import numpy as np
 
 import warpbem as wb
 from common import print_table, write_csv
+from warpbem.app.progress import Progress
 from warpbem.surfaces.refinement import REFERENCE_ELEMENT_SIZE, relative_element_size
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "verification"))
@@ -58,6 +59,7 @@ def main():
     args = parser.parse_args()
     warnings.simplefilter("ignore", wb.ContactResolutionWarning)
     rows, orders = [], []
+    progress = Progress(len(args.heights) * sum(len(ks) for _, _, ks in SCHEMES.values()))
     for h in args.heights:
         for scheme, (p, ratio, ks) in SCHEMES.items():
             previous = None
@@ -69,8 +71,8 @@ def main():
                 contact = 3.0 / scaling if ratio == "fixed" else ratio
                 e = errors(mesh, h, density_order=p, contact_refinement=contact)
                 rows.append(dict(h=h, scheme=scheme, k=k, **e))
-                print(f"h/a = {h}, {scheme}, k = {k}: {e['points']} points, "
-                      + ", ".join(f"{q} {e[q]:+.2e}" for q in QUANTITIES) + f", {e['time_s']:.2f} s", flush=True)
+                progress.done(f"h/a = {h}, {scheme}, k = {k}: {e['points']} points, "
+                              + ", ".join(f"{q} {e[q]:+.2e}" for q in QUANTITIES) + f", {e['time_s']:.2f} s")
                 if previous is not None:
                     k0, e0 = previous
                     orders.append(dict(h=h, scheme=scheme, ks=f"{k0}->{k}",

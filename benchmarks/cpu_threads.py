@@ -17,6 +17,7 @@ import numpy as np
 
 from common import best_time, print_table, write_csv
 from warpbem import Body, mesh
+from warpbem.app.progress import Progress
 from warpbem.kernels import launch
 from warpbem.hydro.geometry import SurfaceGeometry
 from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions
@@ -41,8 +42,9 @@ def main():
     all_cores, chunks = launch.cpu_threads(), launch.CHUNKS_PER_THREAD
     splits = {"1 thread": (1, 1), f"{all_cores} threads, 1 block each": (all_cores, 1),
               f"{all_cores} threads, {chunks} blocks each": (all_cores, chunks)}
-    rows = []
-    for case, geometry in cases(args.subdivisions).items():
+    rows, geometries = [], cases(args.subdivisions)
+    progress = Progress(len(geometries) * len(splits))
+    for case, geometry in geometries.items():
         q = np.random.default_rng(0).standard_normal(3 * geometry.n_elements)
         times = {}
         for split, (threads, per_thread) in splits.items():
@@ -59,6 +61,7 @@ def main():
             op.matvec(q)  # compile and build the self blocks outside the timing
             times[split] = (best_time(assemble, args.repeats), best_time(self_blocks, args.repeats),
                             best_time(lambda: op.matvec(q), args.repeats))
+            progress.done(f"{case}, {split}")
         one = times["1 thread"]
         for split, (a, b, m) in times.items():
             rows.append({"case": case, "elements": geometry.n_elements, "split": split, "assembly_s": a,

@@ -35,6 +35,7 @@ import numpy as np
 
 import warpbem as wb
 from common import arguments, output, print_table, pyplot, save_chart, write_csv
+from warpbem.app.progress import Progress
 from warpbem.dynamics import Flow, Model, Simulator, StepPolicy
 from warpbem.elastic import deformable, interior
 from warpbem.elastic.deformable import Deformation, DeformationOptions
@@ -69,7 +70,7 @@ def steady_shape(k, ca, dt, relaxation, device):
 
 
 def theory_rows(ks, cas, dts, device):
-    rows = []
+    rows, progress = [], Progress(len(cas))
     for ca in cas:
         d_exact, tilt_exact = roscoe(ca)
         row = dict(Ca=ca, D_theory=d_exact, tilt_theory_deg=np.degrees(tilt_exact))
@@ -83,6 +84,7 @@ def theory_rows(ks, cas, dts, device):
                         f"k{k}_s_per_step": 0.5 * (s1 + s2)})
         rows.append(row)
         print_table([row])
+        progress.done(f"Ca = {ca:g}")
     return rows
 
 
@@ -108,7 +110,7 @@ def theory_chart(rows, ks, path):
 
 
 def interval_rows(intervals, k, steps, device):
-    runs = {}
+    runs, progress = {}, Progress(len(intervals))
     for m in intervals:
         sim, state = cell(k, 23.0, 1e-4, True, device, height=7.75e-6, update_interval=m)
         sim.step(state)  # warm-up: kernels and the cell's elastic operators
@@ -119,6 +121,7 @@ def interval_rows(intervals, k, steps, device):
             shapes.append(state.parts["deformation"]["node_displacement"][0].copy())
             paths.append(state.positions[0].copy())
         runs[m] = (time.perf_counter() - start, np.array(shapes), np.array(paths))
+        progress.done(f"update interval {m}")
     base_time, base_shape, base_path = runs[intervals[0]]
     scale = np.abs(base_shape).max()
     travel = np.abs(base_path[-1] - base_path[0]).max()
@@ -160,7 +163,7 @@ class Stopwatch:
 def speed_rows(ks, steps, device):
     traction = Stopwatch(deformable, "solve_traction")
     elastic = Stopwatch(interior.InteriorElasticity, "solve")
-    rows = []
+    rows, progress = [], Progress(len(ks))
     for k in ks:
         runs = {kind: cell(k, 1.0, 1e-4, True, device, height=7.75e-6, rigid=kind == "rigid")
                 for kind in ("rigid", "deformable")}
@@ -181,6 +184,7 @@ def speed_rows(ks, steps, device):
                          traction_share=traction.seconds / seconds["deformable"],
                          elastic_share=elastic.seconds / seconds["deformable"]))
         print_table(rows[-1:])
+        progress.done(f"k = {k}")
     return rows
 
 
@@ -255,10 +259,11 @@ def main():
         print("\n4. where the scheme fails: the viscous number and the step (k = 4, unbounded shear)")
         cases = [(0.2, 1e-4), (1.0, 1e-4)] if args.quick else [(0.2, 1e-4), (0.5, 1e-4), (1.0, 1e-4), (0.1, 1e-4),
                                                               (0.1, 1e-3), (0.1, 3e-3), (0.1, 1e-2)]
-        rows = []
+        rows, progress = [], Progress(len(cases))
         for ca, dt in cases:
             rows.append(limit_row(ca, dt, args.device))
             print_table(rows[-1:])
+            progress.done(f"Ca = {ca:g}, dt = {dt * 1e3:g} ms")
         print_table(rows)
         write_csv("deformable_limits.csv", rows)
 

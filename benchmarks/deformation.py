@@ -17,6 +17,7 @@ import numpy as np
 
 import warpbem as wb
 from common import arguments, best_time, output, print_table, pyplot, save_chart, write_csv
+from warpbem.app.progress import Progress
 from warpbem.elastic.interior import InteriorElasticity
 from warpbem.surfaces.body import Body
 
@@ -72,12 +73,19 @@ def main():
     parser = arguments(__doc__)
     args = parser.parse_args()
     ks = [2, 4] if args.quick else [2, 4, 8, 12]
+    progress = Progress(2 * len(ks))  # each k, traction then elasticity
     print("1. traction (completed adjoint double layer)")
-    traction_rows = [traction_row(k, args.device) for k in ks]
+    traction_rows = []
+    for k in ks:
+        traction_rows.append(traction_row(k, args.device))
+        progress.done(f"traction, k = {k}")
     print_table(traction_rows)
     write_csv("deformation_traction.csv", traction_rows)
     print("\n2. interior elasticity (Kelvinlet BEM)")
-    elastic_rows = [elastic_row(k, args.device) for k in ks]
+    elastic_rows = []
+    for k in ks:
+        elastic_rows.append(elastic_row(k, args.device))
+        progress.done(f"interior elasticity, k = {k}")
     print_table(elastic_rows)
     write_csv("deformation_elastic.csv", elastic_rows)
     print("chart:", chart(traction_rows, elastic_rows, output("deformation.png")))

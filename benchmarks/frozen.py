@@ -60,6 +60,7 @@ from pathlib import Path
 import numpy as np
 
 from common import arguments, output, print_table, pyplot, save_chart, write_csv
+from warpbem.app.progress import Progress
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "array_crossing.toml"
@@ -152,7 +153,7 @@ def errors(args):
     weight[0] = gravity.force[0]
     full = build_solver(without_split(options), flow, args.device)
     split = FrozenArraySolver(build_solver(without_split(options), flow, args.device), cutoff=0.0)
-    rows, raw = [], []
+    rows, raw, progress = [], [], Progress(len(args.positions))
     for x in args.positions:
         bodies = [wb.Body(free_mesh, position=(x, 0.0, 6e-6))] + fixed_bodies
         with warnings.catch_warnings():
@@ -169,7 +170,7 @@ def errors(args):
                                 velocity_error=rel(sol.velocity[0], exact.velocity[0]),
                                 angular_error=rel(sol.angular_velocity[0], exact.angular_velocity[0]),
                                 split_s=elapsed, full_s=full_time))
-        print(f"x = {x * 1e6:.0f} um: full solve {full_time:.2f} s, U = {exact.velocity[0] * 1e6} um/s", flush=True)
+        progress.done(f"x = {x * 1e6:.0f} um: full solve {full_time:.2f} s, U = {exact.velocity[0] * 1e6} um/s")
     for cutoff in args.cutoffs:
         at = [r for r in raw if r["cutoff_um"] == cutoff * 1e6]
         rows.append(dict(cutoff_um=cutoff * 1e6, near_mean=np.mean([r["near"] for r in at]),
@@ -282,16 +283,16 @@ STEP_FORMATS = {"setup_s": "{:.1f}", "step_s": "{:.3f}", "first_steps_s": "{:.2f
 
 def steps(args):
     """Each path's arrays, each with the split and then (--full) without, side by side."""
-    rows = []
-    for path in args.paths:
-        # each array with the split and then without, side by side (the shared machine's load drifts)
-        cases = [(n, split) for n in args.counts for split in (True, False)
-                 if split or (args.full and n <= args.full_max)]
-        for n, split in cases:
-            overrides, layout = path_case(path, n)
-            row = run_case(SCENE.name, overrides, args.steps, split, args.device, layout)
-            rows.append(dict(path=path, array=f"{n}x{n}", **row))
-            print_table(rows[-1:], STEP_FORMATS)
+    # each array with the split and then without, side by side (the shared machine's load drifts)
+    cases = [(path, n, split) for path in args.paths for n in args.counts for split in (True, False)
+             if split or (args.full and n <= args.full_max)]
+    rows, progress = [], Progress(len(cases))
+    for path, n, split in cases:
+        overrides, layout = path_case(path, n)
+        row = run_case(SCENE.name, overrides, args.steps, split, args.device, layout)
+        rows.append(dict(path=path, array=f"{n}x{n}", **row))
+        print_table(rows[-1:], STEP_FORMATS)
+        progress.done(f"{path}, {n} x {n}, {'split' if split else 'full'}")
     for r in rows:
         same = [q for q in rows if q["path"] == r["path"] and q["split"] == r["split"]]
         smallest = min(same, key=lambda q: q["domes"])
@@ -356,7 +357,8 @@ def suspension(args):
     model, bodies = loaded.model, loaded.initial_bodies()
     weight = model.bound("gravity").force
     free = ~model.fixed_mask
-    rows = []
+    # the full solve, each cut-off, then the scene's steps
+    rows, progress = [], Progress(1 + len(args.suspension_cutoffs) + (args.scene_steps > 0))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", wb.ContactResolutionWarning)
         full = build_solver(without_split(model.solver), model.flow, args.device)
@@ -366,6 +368,7 @@ def suspension(args):
                          time_s=time.perf_counter() - t, iterations=exact.iterations, operator=exact.operator_mode,
                          velocity_error_max=0.0, angular_error_max=0.0))
         print_table(rows[-1:])
+        progress.done("full solve")
         del full
         for cutoff in args.suspension_cutoffs:
             split = FrozenArraySolver(build_solver(without_split(model.solver), model.flow, args.device), cutoff)
@@ -385,12 +388,14 @@ def suspension(args):
                              angular_error_max=max(rel(sol.angular_velocity[i], exact.angular_velocity[i])
                                                    for i in np.flatnonzero(free))))
             print_table(rows[-1:])
+            progress.done(f"split, cut-off {cutoff * 1e6:g} um")
     print()
     print_table(rows, {"velocity_error_max": "{:.2e}", "angular_error_max": "{:.2e}", "time_s": "{:.1f}"})
     write_csv("frozen_suspension.csv", rows)
     if not args.scene_steps:
         return
     run = run_case(SUSPENSION, [], args.scene_steps, True, args.device)
+    progress.done(f"the scene's {args.scene_steps} steps")
     print_table([run], STEP_FORMATS)
     write_csv("frozen_suspension_steps.csv", [run])
 

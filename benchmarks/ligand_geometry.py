@@ -30,6 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
+from warpbem.app.progress import Progress
+
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "scenes"
 RULES = {"layer": ["adhesion.ligand_geometry=layer"], "plane": ["adhesion.ligand_geometry=plane"],
@@ -128,14 +130,11 @@ def main():
     args = parser.parse_args()
     args.output_dir.mkdir(parents=True, exist_ok=True)
     jobs = [(label, rule) for label in args.cases for rule in args.rules]
-    walls, done = {}, 0
-    start = time.perf_counter()
+    walls, progress = {}, Progress(len(jobs))
     with ThreadPoolExecutor(max_workers=args.workers) as pool:
         for job, wall in zip(jobs, pool.map(lambda j: run(*j, args.output_dir), jobs)):
-            walls[job], done = wall, done + 1
-            elapsed = time.perf_counter() - start
-            eta = elapsed / done * (len(jobs) - done)
-            print(f"{done} / {len(jobs)}  {job[0]} ({job[1]}): {wall:.0f} s;  ETA {eta:.0f} s", flush=True)
+            walls[job] = wall
+            progress.done(f"{job[0]} ({job[1]}): {wall:.0f} s")
     rows = [measure(label, rule, args.output_dir / file_name(label, rule), walls[(label, rule)])
             for label, rule in jobs]
     keys = list(rows[0])

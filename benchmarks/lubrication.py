@@ -24,6 +24,7 @@ import numpy as np
 
 import warpbem as wb
 from common import arguments, output, print_table, pyplot, save_chart, write_csv
+from warpbem.app.progress import Progress
 from warpbem.forces.lubrication import shear_force, squeeze_force
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "verification"))
@@ -45,7 +46,7 @@ def pair_force(k, eps, velocity, device):
 
 
 def rows_for(ks, gaps, device):
-    rows = []
+    rows, progress = [], Progress(len(gaps))
     for eps in gaps:
         line = np.array([1.0, 0.0, 0.0])
         exact = -6 * np.pi * MU * A * U * series.approaching_spheres_lambda(1 + eps / (2 * A))
@@ -60,6 +61,7 @@ def rows_for(ks, gaps, device):
                         f"k{k}_unresolved": unresolved})
         rows.append(row)
         print_table([row])
+        progress.done(f"gap {eps * 1e9:g} nm")
     return rows
 
 

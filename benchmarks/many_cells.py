@@ -75,6 +75,7 @@ import numpy as np
 
 import warpbem as wb
 from common import arguments, output as output_path, print_table, pyplot, save_chart, write_csv
+from warpbem.app.progress import Progress
 from warpbem.dynamics import implicit
 from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion
 from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy, build_solver
@@ -181,7 +182,7 @@ def accuracy(device, cases, k, refinement=None):
     on the k sphere refined with ``refinement`` (default: the time-stepped models' 3)."""
     mesh = wb.mesh.sphere(A, k)
     fine = {} if refinement is None else dict(contact_refinement=refinement)
-    rows = []
+    rows, progress = [], Progress(len(cases))
     for kind, n, spacing in cases:
         positions = arrangement(kind, n, spacing)
         bodies = [Body(mesh, position=p) for p in positions]
@@ -222,6 +223,7 @@ def accuracy(device, cases, k, refinement=None):
         row["alone_grand"], row["alone_flow"] = change(approximations["alone"], exact)
         rows.append(row)
         print_table([row])
+        progress.done(f"accuracy: {kind} of {n} cells, {spacing * 1e6:g} um apart")
     return rows
 
 
@@ -250,7 +252,7 @@ def per_cell(u, n):
 def resistance_error(device, cases, k):
     """The pairwise-additive mobility and resistance against the whole system (part 1a)."""
     mesh = wb.mesh.sphere(A, k)
-    rows = []
+    rows, progress = [], Progress(len(cases))
     for kind, n, spacing in cases:
         bodies = [Body(mesh, position=p) for p in arrangement(kind, n, spacing)]
         exact = embedded(solves(mesh, n, device), bodies, list(range(n)), n)
@@ -278,6 +280,7 @@ def resistance_error(device, cases, k):
                          mobility_flow=mobility_flow, resistance_grand=resistance_grand,
                          resistance_flow=resistance_flow))
         print_table([rows[-1]])
+        progress.done(f"resistance: {kind} of {n} cells, {spacing * 1e6:g} um apart")
     return rows
 
 
@@ -291,12 +294,13 @@ def cutoff_error(device, side, spacing, cutoffs, k):
     bodies = [Body(mesh, position=p) for p in positions]
     hydro = solves(mesh, n, device, reuse_tolerance=2e-9, grand_mobility="pairs", pair_cutoff=1e-2)
     every = motion(*hydro._snapshot(bodies))
-    rows = []
+    rows, progress = [], Progress(len(cutoffs))
     for cutoff in cutoffs:  # the same pair snapshots, fewer of them summed
         hydro.pairwise.cutoff = cutoff
         grand, flow = change(motion(*hydro._snapshot(bodies)), every)
         rows.append(dict(cells=n, spacing_um=spacing * 1e6, cutoff_um=cutoff * 1e6, grand=grand, flow=flow))
         print_table([rows[-1]])
+        progress.done(f"cut-off {cutoff * 1e6:g} um")
     return rows
 
 
@@ -306,7 +310,7 @@ def lattice_error(device, distances, bases, k):
     (pair_lateral; the lattice spacing at each distance follows from it)."""
     mesh = wb.mesh.sphere(A, k)
     direction = np.array([np.cos(np.pi / 6), np.sin(np.pi / 6)])
-    rows = []
+    rows, progress = [], Progress(len(distances) * len(bases))
     for distance in distances:
         offset = distance * direction
         bodies = [Body(mesh, position=(0.0, 0.0, REST)), Body(mesh, position=(*offset, REST))]
@@ -322,6 +326,7 @@ def lattice_error(device, distances, bases, k):
             rows.append(dict(distance_um=distance * 1e6, pair_lateral_nm=base * 1e9, spacing_nm=spacing * 1e9,
                              interpolated=interpolated, nearest_point=snapped, snapshots=hydro.snapshots_solved))
             print_table([rows[-1]])
+            progress.done(f"lattice: {distance * 1e6:g} um apart, pair_lateral {base * 1e9:g} nm")
     return rows
 
 
@@ -371,13 +376,14 @@ def factor_store(device, k, count):
     mesh = wb.mesh.sphere(A, k)
     kept, plain = (solves(mesh, 2, device, reuse_tolerance=2e-9, grand_mobility="pairs") for _ in range(2))
     plain.mobility._factors = None
-    walls = {"store": [], "no store": []}
+    walls, progress = {"store": [], "no store": []}, Progress(count)
     for i in range(count):
         bodies = [Body(mesh, position=(0.0, 0.0, REST)), Body(mesh, position=(15e-6 + 0.5e-6 * i, 0.0, REST + 20e-9))]
         for name, hydro in (("store", kept), ("no store", plain)):
             t = time.perf_counter()
             hydro._solved(bodies)
             walls[name].append(time.perf_counter() - t)
+        progress.done(f"snapshot {i + 1}, with the store and without")
     store = kept.mobility._factors
     rows = [dict(k=k, snapshots=count, store=name, mean_s=float(np.mean(w)), first_s=w[0], later_mean_s=float(np.mean(w[1:])),
                  hits=store.hits if name == "store" else 0) for name, w in walls.items()]
@@ -393,7 +399,7 @@ def batched_loads(device, k, count):
     offset by offset, and the largest difference between their grand mobilities."""
     mesh = wb.mesh.sphere(A, k)
     batched, sequential = (solves(mesh, 2, device, reuse_tolerance=2e-9, grand_mobility="pairs") for _ in range(2))
-    rows = []
+    rows, progress = [], Progress(count)
     for i in range(count):
         bodies = [Body(mesh, position=(0.0, 0.0, REST)),
                   Body(mesh, position=(12e-6 + 0.5e-6 * i, 0.3e-6, REST + 20e-9))]
@@ -415,6 +421,7 @@ def batched_loads(device, k, count):
                          iterations_one_by_one=sum(s.iterations for s in one_by_one),
                          difference=float(np.abs(raw.velocity - velocity).max() / np.abs(velocity).max())))
         print_table([rows[-1]])
+        progress.done(f"batched loads: snapshot {i + 1}")
     print(f"one by one over batched: {np.mean([r['ratio'] for r in rows]):.2f} times the time (mean)")
     return rows
 
@@ -425,7 +432,7 @@ def batched_coarse_systems(device, counts):
     mesh = wb.mesh.sphere(A, COARSE_K)
     warm_up = [Body(mesh, position=p) for p in arrangement("patch", 4, 25e-6)]
     solves(mesh, 4, device, contact_refinement=0.0)._solved(warm_up)  # the process's first solves load kernels
-    rows = []
+    rows, progress = [], Progress(len(counts))
     for n in counts:
         bodies = [Body(mesh, position=p) for p in arrangement("patch", n, 25e-6)]
         batched, sequential = (solves(mesh, n, device, contact_refinement=0.0) for _ in range(2))
@@ -439,6 +446,7 @@ def batched_coarse_systems(device, counts):
         rows.append(dict(cells=n, unknowns=sequential.mobility.last_system[0].size, batched_s=batched_s,
                          one_by_one_s=time.perf_counter() - t))
         print_table([rows[-1]])
+        progress.done(f"coarse system: {n} cells")
     for key in ("batched_s", "one_by_one_s"):
         slope, _ = exponent(rows, key)
         print(f"{key}: n^{slope:.2f}")
@@ -465,12 +473,15 @@ def solved_snapshots(hydro):
     return hydro.snapshots_solved + (remainder.solved if remainder is not None else 0)
 
 
-def cost(device, counts_by_mode, spacing, end, k=3):
+def cost(device, counts_by_mode, spacing, end, k=3, progress=None, label=""):
     """Wall time of n rolling cells over ``end`` s, for the cell counts of each mode (MODES) side
     by side: the median step that solved no new snapshot (the cost that must grow linearly), the
     snapshots solved (remainders included) and the time they took (the steps' excess over that
-    median), the memory of the kept snapshots and the process's peak resident memory so far."""
+    median), the memory of the kept snapshots and the process's peak resident memory so far. A
+    line per run to ``progress`` (a Progress; by default one of the runs here), after ``label``."""
     rows = []
+    if progress is None:
+        progress = Progress(sum(len(ns) for ns in counts_by_mode.values()))
     for mode, ns in counts_by_mode.items():
         for n in ns:
             model, state = rolling_patch(n, spacing, mode, k)
@@ -493,6 +504,7 @@ def cost(device, counts_by_mode, spacing, end, k=3):
                              # the process's peak so far: the runs go from few cells to many
                              peak_rss_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e3))
             print_table([rows[-1]])
+            progress.done(f"{label}{mode}, {n} cells, {end * 1e3:g} ms")
     return rows
 
 
@@ -501,11 +513,12 @@ def implicit_solvers(device, counts, end, k):
     Newton step solved without forming its matrix (MobilityResponse) and from the matrix formed
     (its ``newton_step`` declined), the two interleaved."""
     formed = mock.patch.object(implicit.MobilityResponse, "newton_step", lambda *args: None)
-    rows = []
+    rows, progress = [], Progress(2 * len(counts))
     for n in counts:
         for name, patch in (("structured", contextlib.nullcontext()), ("formed", formed)):
             with patch:
-                rows += [dict(implicit=name, **row) for row in cost(device, {"pairs": [n]}, 25e-6, end, k)]
+                rows += [dict(implicit=name, **row)
+                         for row in cost(device, {"pairs": [n]}, 25e-6, end, k, progress, f"{name}: ")]
     return rows
 
 
@@ -568,11 +581,12 @@ def main():
         rows = lattice_error(args.device, distances, bases, args.k)
         print(f"wrote {write_csv('many_cells_lattice.csv', rows)}")
     if "reuse" in args.parts:
-        rows = []
+        rows, progress = [], Progress(len(args.runs))
         for path in args.runs:
             new, old, pairs, frames = visited_points(path)
             rows.append(dict(run=path, pairs=pairs, frames=frames, interpolated_points=new, nearest_points_before=old))
             print_table([rows[-1]])
+            progress.done(path)
         print(f"wrote {write_csv('many_cells_reuse.csv', rows)}")
     if "factors" in args.parts:
         rows = factor_store(args.device, 2 if args.quick else 3, 3 if args.quick else 6)

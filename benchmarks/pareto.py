@@ -30,6 +30,7 @@ import numpy as np
 
 import warpbem as wb
 from common import output, print_table, pyplot, write_csv
+from warpbem.app.progress import Progress
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests" / "verification"))
@@ -171,6 +172,7 @@ def main():
         rows = read_csv()
     else:
         rows = []
+        progress = Progress(len(args.ks) * len(args.orders) * 2 * len(CASES))
         for k in args.ks:
             mesh = wb.mesh.sphere(1.0, k)
             for p in args.orders:
@@ -181,7 +183,7 @@ def main():
                         error, t, median, points = timed(case, mesh, **options)
                         rows.append(dict(code="warpbem", config=config, k=k, p=p, refined=refined, case=case,
                                          points=points, error=error, time_s=t, median_s=median))
-                print(f"k = {k}, p = {p}: done", flush=True)
+                        progress.done(f"{config}, {case}: error {error:.2e}, {t:.3g} s per solve")
         print_table([{key: r[key] for key in ("config", "case", "points", "error", "time_s", "median_s")} for r in rows])
         rows += peer_rows()
         print(f"csv: {write_csv('pareto.csv', rows)}")

@@ -20,6 +20,7 @@ import numpy as np
 
 import warpbem as wb
 from common import pyplot, print_table, write_csv, output
+from warpbem.app.progress import Progress
 
 
 def scene(n_fixed, mesh, x_free):
@@ -56,7 +57,7 @@ def main():
     args = parser.parse_args()
     mesh = wb.mesh.sphere(5e-6, 4)
     run(1, True, 2, mesh)  # compile kernels outside the timings
-    rows = []
+    rows, progress = [], Progress(len(args.counts))
     for n in args.counts:
         plain = run(n, False, args.solves, mesh, args.device)
         kept = run(n, True, args.solves, mesh, args.device)
@@ -67,6 +68,7 @@ def main():
                          reuse_plain_gmres_s=unpreconditioned[0], iterations_plain_gmres=unpreconditioned[1],
                          mode_plain_gmres=unpreconditioned[3]))
         print_table(rows[-1:] if len(rows) > 1 else rows)
+        progress.done(f"{n} fixed cells")
     print()
     print_table(rows)
     print(f"csv: {write_csv('reuse.csv', rows)}")

@@ -28,6 +28,7 @@ import numpy as np
 
 import numpy_baseline
 from common import arguments, best_time, output, print_table, pyplot, save_chart, write_csv
+from warpbem.app.progress import Progress
 from warpbem import Body, ContactResolutionWarning, MobilitySolver, mesh, runtime
 from warpbem.hydro.geometry import SurfaceGeometry
 from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions
@@ -93,7 +94,8 @@ def main():
     if args.quick:
         args.counts, args.tolerances, args.sweep = [8, 64], [1e-4], [1e-3, 1e-5]
     device = runtime.resolve_device(args.device)
-    sweep = tolerance_sweep(args, device)
+    progress = Progress(len(args.sweep) + len(args.counts))  # the tolerance sweep, then each count
+    sweep = tolerance_sweep(args, device, progress)
     rows = []
     for n in args.counts:
         bodies = cells(n)
@@ -154,6 +156,7 @@ def main():
         row["max_rss_GB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
         rows.append(row)
         print({k: (float(f"{v:.4g}") if isinstance(v, float) else v) for k, v in row.items()}, flush=True)
+        progress.done(f"{n} cells")
 
     keys = ["cells", "elements", "matrix_GB", "warp_free_apply_s", "direct_product_s", "numpy_apply_s",
             "numpy_over_warp", "max_abs_diff", "assembly_s", "dense_product_s", "free_over_dense_apply",
@@ -214,9 +217,10 @@ def main():
     print(f"chart: {save_chart(fig, output('scale.png'), (ax, ax_err, ax_sweep), legend_size=7)}")
 
 
-def tolerance_sweep(args, device) -> list:
+def tolerance_sweep(args, device, progress) -> list:
     """Error against the direct sum, product and set-up time, points per box at the leaves and
-    ranks, over the treecode's tolerance, at --sweep-cells cells."""
+    ranks, over the treecode's tolerance, at --sweep-cells cells; a line to ``progress`` (a
+    Progress) per tolerance."""
     bodies = cells(args.sweep_cells)
     geometry = SurfaceGeometry.from_bodies(bodies, QuadratureOptions().order, 1.0, True)
     q = np.random.default_rng(1).standard_normal(3 * geometry.n_elements)
@@ -232,6 +236,7 @@ def tolerance_sweep(args, device) -> list:
                          setup_s=time.perf_counter() - t, product_s=best_time(lambda: tree.matvec(q), 2),
                          leaf_points=str(far.points[-1]), largest_rank=max(max(r) for r in far.ranks.values()),
                          far_GB=far.memory_bytes / 1e9))
+        progress.done(f"tolerance {tolerance:g} at {args.sweep_cells} cells")
     print_table(rows)
     print(f"csv: {write_csv('scale_tolerance.csv', rows)}")
     return rows

@@ -16,6 +16,7 @@ import numpy as np
 
 import warpbem as wb
 from common import output, print_table, pyplot, write_csv
+from warpbem.app.progress import Progress
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "verification"))
 import sphere_wall_series as series  # noqa: E402
@@ -72,17 +73,20 @@ def main():
     args = parser.parse_args()
     mesh = wb.mesh.sphere(1.0, 4)
     rows = []
-    for name, options in OPTIONS.items():
-        for gap in [g for g in args.gaps if g >= SMALLEST_GAP.get(name, 0.0)]:
-            row = dict(option=name, gap=gap, gap_over_element=gap / ELEMENT_SIZE)
-            row.update(wall_errors(mesh, gap, options))
-            if gap >= SMALLEST_PAIR_GAP.get(name, 0.02) or options.get("contact_refinement") == 0.0:
-                row.update(pair_errors(mesh, gap, options))
-            else:
-                row.update(err_pair=np.nan, iterations_pair=np.nan, stalled_pair=False, elements_pair=0)
-            rows.append(row)
-            print_table([row]) if len(rows) == 1 else print(
-                "  ".join(f"{v:.3g}" if isinstance(v, float) else str(v) for v in row.values()), flush=True)
+    cases = [(name, options, gap) for name, options in OPTIONS.items()
+             for gap in args.gaps if gap >= SMALLEST_GAP.get(name, 0.0)]
+    progress = Progress(len(cases))
+    for name, options, gap in cases:
+        row = dict(option=name, gap=gap, gap_over_element=gap / ELEMENT_SIZE)
+        row.update(wall_errors(mesh, gap, options))
+        if gap >= SMALLEST_PAIR_GAP.get(name, 0.02) or options.get("contact_refinement") == 0.0:
+            row.update(pair_errors(mesh, gap, options))
+        else:
+            row.update(err_pair=np.nan, iterations_pair=np.nan, stalled_pair=False, elements_pair=0)
+        rows.append(row)
+        print_table([row]) if len(rows) == 1 else print(
+            "  ".join(f"{v:.3g}" if isinstance(v, float) else str(v) for v in row.values()), flush=True)
+        progress.done(f"{name}, gap {gap:g}")
     print()
     print_table(rows)
     print(f"csv: {write_csv('stability.csv', rows)}")

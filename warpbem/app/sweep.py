@@ -36,7 +36,6 @@ import os
 import signal
 import sys
 import threading
-import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -45,6 +44,7 @@ import numpy as np
 from ..dynamics.frame import frame_columns
 from . import run as runner
 from .io import RunFileError, complete_rows, open_result
+from .progress import Progress
 from .scene import SceneError, load
 
 
@@ -140,18 +140,16 @@ def _failed(i, job, err) -> SweepError:
     return SweepError(f"point{i:03d} ({', '.join(job[3])}) failed: {type(err).__name__}: {err}")
 
 
-def _line(done, total, row, what, started) -> str:
-    """A point's progress line: done / total, the point, and the ETA from the time per point so
-    far (``started``: the sweep's time.monotonic() at its start)."""
-    eta = (time.monotonic() - started) / done * (total - done)
-    return f"[{done}/{total}] {what} {row['file']}: " + ", ".join(
-        f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}" for k, v in row.items() if k != "file") + (
-        f"  ETA {eta / 60:.1f} min" if done < total else "")
+def _line(row, what) -> str:
+    """What a point's progress line says after its count: what was done, the point's file and labels."""
+    return f"{what} {row['file']}: " + ", ".join(
+        f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}" for k, v in row.items() if k != "file")
 
 
-def _on_cluster(jobs, scheduler, progress, started) -> list[dict]:
-    """The points' rows in grid order, run as tasks on a Dask cluster; a progress line as each
-    finishes. ``scheduler``: an address, or a ``distributed.Client`` (left open)."""
+def _on_cluster(jobs, scheduler, counter) -> list[dict]:
+    """The points' rows in grid order, run as tasks on a Dask cluster; a progress line (through
+    ``counter``, a Progress) as each finishes. ``scheduler``: an address, or a ``distributed.Client``
+    (left open)."""
     try:
         from distributed import Client, as_completed
     except ImportError as err:
@@ -168,7 +166,7 @@ def _on_cluster(jobs, scheduler, progress, started) -> list[dict]:
             # writes a file, so two equal jobs must both run rather than share one result
             job = (Path(scene_path).resolve(), Path(output).resolve(), *rest)
             futures[client.submit(_run_point, job, pure=False)] = i
-        for done, future in enumerate(as_completed(futures), 1):
+        for future in as_completed(futures):
             i = futures[future]
             try:
                 row, what = future.result()
@@ -176,7 +174,7 @@ def _on_cluster(jobs, scheduler, progress, started) -> list[dict]:
                 raise SweepError(f"point{i:03d} ({', '.join(jobs[i][3])}) failed on the cluster:"
                                  f" {type(err).__name__}: {err}") from err
             rows[i] = {**row, "file": str(jobs[i][1])}  # the file named as a local sweep names it
-            progress(_line(done, len(jobs), rows[i], what, started))
+            counter.done(_line(rows[i], what))
     finally:
         client.cancel(list(futures))  # nothing left running on the cluster after an error or interrupt
         if own:
@@ -202,9 +200,9 @@ def sweep(scene_path, varies, output_dir, device="cpu", workers=1, progress=prin
         if not overwrite:
             point_status(job[1], scene)
     output_dir.mkdir(parents=True, exist_ok=True)
-    started = time.monotonic()
+    counter = Progress(len(jobs), progress)
     if scheduler is not None:
-        rows = _on_cluster(jobs, scheduler, progress, started)
+        rows = _on_cluster(jobs, scheduler, counter)
     elif workers <= 1:
         rows = []
         for i, job in enumerate(jobs):
@@ -213,9 +211,9 @@ def sweep(scene_path, varies, output_dir, device="cpu", workers=1, progress=prin
             except Exception as err:
                 raise _failed(i, job, err) from err
             rows.append(row)
-            progress(_line(i + 1, len(jobs), row, what, started))
+            counter.done(_line(row, what))
     else:
-        rows = _in_processes(jobs, workers, progress, started)
+        rows = _in_processes(jobs, workers, counter)
     summary = output_dir / "summary.csv"
     with summary.open("w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
@@ -269,7 +267,7 @@ def _stop_workers(pool):
             p.join()
 
 
-def _in_processes(jobs, workers, progress, started) -> list[dict]:
+def _in_processes(jobs, workers, counter) -> list[dict]:
     """The points' rows in grid order from local worker processes (fresh interpreters, spawn:
     Warp's runtime is not safe to fork once initialised). On a failure the pending points are
     cancelled and the pool shut down once the running ones finish (their files are complete).
@@ -286,7 +284,7 @@ def _in_processes(jobs, workers, progress, started) -> list[dict]:
                 except Exception as err:
                     raise _failed(i, jobs[i], err) from err
                 rows.append(row)
-                progress(_line(i + 1, len(jobs), row, what, started))
+                counter.done(_line(row, what))
             return rows
         except KeyboardInterrupt:
             _stop_workers(pool)
