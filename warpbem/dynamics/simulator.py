@@ -24,6 +24,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .. import runtime
 from ..forces.interaction import ImplicitCoordinates, Loads
 from ..surfaces.gaps import Contacts, GapFinder
 from ..surfaces.placement import PlacementError, check_placement
@@ -223,6 +224,7 @@ class Simulator:
         while True:
             try:
                 end = self._integrate(start, dt, t_stop if dt == t_stop - state.time else None)
+                runtime.release_freed_memory()  # what this step freed, back to the system (runtime.py)
                 return end.state, end.frame(dt)
             except (PlacementError, ImplicitSolveError) as err:
                 if dt <= self.model.policy.dt_min * (1 + 1e-12):
