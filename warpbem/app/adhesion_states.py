@@ -1,4 +1,4 @@
-"""The state of an adhesive run from its trajectory (Chang, King & Hammer 2000, PNAS 97:11262:
+"""The state of an adhesive run from its trajectory (Chang, Tees & Hammer 2000, PNAS 97:11262:
 the adhesion state diagram), for ``warpbem sweep`` results and ``scenes/state_diagram.py``.
 
 Rule (documented, applied to each adhesive free cell): over the last half of the run, the mean
