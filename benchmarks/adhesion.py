@@ -84,7 +84,7 @@ def kernel_throughput(device, sizes):
                          kinetics_s=t_kin, kinetics_receptors_per_s=len(adh.tips) / t_kin))
         progress.done(f"bond kernels: {cells} cells, {n} bonds")
     solver = build_solver(SolverOptions(), Flow(100.0, 1e-3), device)
-    solver.reuse = False  # from scratch: no kept blocks, no warm start
+    solver.keep_systems = False  # from scratch: no kept blocks, no warm start
     mesh4 = wb.mesh.sphere(A, 4)
     solver.solve([Body(mesh4, position=(0, 0, REST))])
     t_solve = min(_timed(lambda: solver.solve([Body(mesh4, position=(0, 0, REST))])) for _ in range(3))

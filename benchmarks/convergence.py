@@ -38,14 +38,16 @@ QUANTITIES = ("U", "Omega", "Ft", "lambda")
 
 
 def errors(mesh, h, **options):
+    """The four errors at h/a = h with the solver ``options`` (``SolverOptions`` fields)."""
+    options = wb.SolverOptions(**options)
     ref = series.free_sphere_in_shear(h)
     t = time.perf_counter()
-    free = wb.solve_mobility([wb.Body(mesh, position=(0, 0, h))], shear_rate=1.0, viscosity=1.0, **options)
+    free = wb.solve_mobility([wb.Body(mesh, position=(0, 0, h))], shear_rate=1.0, viscosity=1.0, options=options)
     elapsed = time.perf_counter() - t
     par = wb.solve_mobility([wb.Body(mesh, position=(0, 0, h), fixed=True, velocity=(1.0, 0, 0))], viscosity=1.0,
-                            **options)
+                            options=options)
     nor = wb.solve_mobility([wb.Body(mesh, position=(0, 0, h), fixed=True, velocity=(0, 0, 1.0))], viscosity=1.0,
-                            **options)
+                            options=options)
     return dict(points=len(free.solution_vector) // 3, time_s=elapsed,
                 U=free.velocity[0, 0] / h / ref["U_over_gdot_h"] - 1,
                 Omega=free.angular_velocity[0, 1] / ref["Omega_over_gdot"] - 1,

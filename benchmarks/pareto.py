@@ -63,13 +63,14 @@ def peer_rows(path: Path = PEER_TABLE) -> list[dict]:
 
 
 def case_solve(case: str, mesh, **options):
-    """One solve of a case from scratch (new bodies)."""
+    """One solve of a case from scratch (new bodies), with the solver ``options`` (``SolverOptions`` fields)."""
+    options = wb.SolverOptions(**options)
     h = 1.5 if "1.5" in case else 1.1
     if case.startswith("free"):
-        return wb.solve_mobility([wb.Body(mesh, position=(0, 0, h))], shear_rate=1.0, viscosity=1.0, **options)
+        return wb.solve_mobility([wb.Body(mesh, position=(0, 0, h))], shear_rate=1.0, viscosity=1.0, options=options)
     velocity = (1.0, 0, 0) if case.startswith("parallel") else (0, 0, 1.0)
     return wb.solve_mobility([wb.Body(mesh, position=(0, 0, h), fixed=True, velocity=velocity)], viscosity=1.0,
-                             **options)
+                             options=options)
 
 
 def case_error(case: str, sol) -> float:

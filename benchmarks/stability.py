@@ -36,19 +36,21 @@ SMALLEST_PAIR_GAP = {"p=1, contact refinement 3 (scaled)": 0.05}  # p = 1: 3 tim
 ELEMENT_SIZE = 2 * np.pi / 16  # edge of a k = 4 cube-sphere element, in radii
 
 
-def solve(bodies, **kwargs):
+def solve(bodies, options, **flow):
+    """One solve with the solver ``options`` (a dict of ``SolverOptions`` fields) and the flow and
+    loads ``flow`` (keywords of ``solve_mobility``); (solution, False), or (None, True) if it stalls."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            return wb.solve_mobility(bodies, viscosity=1.0, **kwargs), False
+            return wb.solve_mobility(bodies, viscosity=1.0, options=wb.SolverOptions(**options), **flow), False
     except wb.ConvergenceError:
         return None, True
 
 
 def wall_errors(mesh, gap, options):
     h = 1.0 + gap
-    free, stall_a = solve([wb.Body(mesh, position=(0, 0, h))], shear_rate=1.0, **options)
-    pushed, stall_b = solve([wb.Body(mesh, position=(0, 0, h), fixed=True, velocity=(0, 0, 1.0))], **options)
+    free, stall_a = solve([wb.Body(mesh, position=(0, 0, h))], options, shear_rate=1.0)
+    pushed, stall_b = solve([wb.Body(mesh, position=(0, 0, h), fixed=True, velocity=(0, 0, 1.0))], options)
     ref = series.free_sphere_in_shear(h)
     err_shear = np.nan if free is None else max(abs(free.velocity[0, 0] / h / ref["U_over_gdot_h"] - 1),
                                                   abs(free.angular_velocity[0, 1] / ref["Omega_over_gdot"] - 1))
@@ -61,7 +63,7 @@ def wall_errors(mesh, gap, options):
 def pair_errors(mesh, gap, options):
     h = 1.0 + gap / 2
     bodies = [wb.Body(mesh, position=(0, 0, 0)), wb.Body(mesh, position=(2 * h, 0, 0))]
-    sol, stalled = solve(bodies, wall=False, forces=[[6 * np.pi, 0, 0], [-6 * np.pi, 0, 0]], **options)
+    sol, stalled = solve(bodies, options, wall=False, forces=[[6 * np.pi, 0, 0], [-6 * np.pi, 0, 0]])
     err = np.nan if sol is None else abs(1 / sol.velocity[0, 0] / series.approaching_spheres_lambda(h) - 1)
     return dict(err_pair=err, iterations_pair=np.nan if sol is None else sol.iterations, stalled_pair=stalled,
                 elements_pair=0 if sol is None else len(sol.solution_vector) // 3)
