@@ -80,7 +80,8 @@ def main():
         rows.append({"workload": name, "blas": setting, "median_ms": 1e3 * median, "p10_ms": 1e3 * p10,
                      "p90_ms": 1e3 * p90, "min_ms": 1e3 * t.min(), "max_ms": 1e3 * t.max(),
                      "p90_over_p10": p90 / p10, "max_over_min": t.max() / t.min()})
-    print_table(rows, {k: "{:.1f}" if k.endswith("_ms") else "{:.2f}" for k in rows[0] if k not in ("workload", "blas")})
+    print_table(rows, {k: "{:.1f}" if k.endswith("_ms") else "{:.2f}"
+                       for k in rows[0] if k not in ("workload", "blas")})
     print(f"table: {write_csv('blas_threads.csv', rows)}")
     plt = pyplot()
     fig, axes = plt.subplots(1, len(workloads), figsize=(4 * len(workloads), 3.6))

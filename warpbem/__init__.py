@@ -20,7 +20,6 @@ from .surfaces.mesh import MeshError
 from .surfaces.placement import PlacementError
 
 __version__ = "0.1.0"
-__all__ = ["mesh", "units", "Body", "Flow", "SolverOptions", "solve_mobility", "MobilitySolver", "FrozenArraySolver", "MobilitySolution",
-           "solve_traction",
-           "TractionSolution", "TreecodeOptions", "ConvergenceError", "DeformationError", "DeformationWarning",
+__all__ = ["mesh", "units", "Body", "Flow", "SolverOptions", "solve_mobility", "MobilitySolver", "FrozenArraySolver",
+           "MobilitySolution", "solve_traction", "TractionSolution", "TreecodeOptions", "ConvergenceError", "DeformationError", "DeformationWarning",
            "MeshError", "PlacementError", "ContactResolutionWarning", "__version__"]
