@@ -32,8 +32,9 @@ import csv
 import json
 from pathlib import Path
 
-from warpbem.app.adhesion_states import STATES, classify
+from warpbem.app.adhesion_states import classify
 from warpbem.app.io import open_result
+from warpbem.app.plotting import draw_adhesion_states
 from warpbem.app.sweep import sweep
 
 SCENE = Path(__file__).resolve().parents[1] / "scenes" / "state_diagram.toml"
@@ -73,19 +74,9 @@ def chart(rows, path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    marks = {"no adhesion": ("o", "white"), "rolling": ("s", "C1"), "firm adhesion": ("D", "C0")}
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for state in STATES:
-        chosen = [r for r in rows if r["state"] == state]
-        if chosen:
-            ax.scatter([r["reactive_compliance"] * 1e10 for r in chosen], [r["off_rate"] for r in chosen], s=200,
-                       marker=marks[state][0], facecolor=marks[state][1], edgecolor="k", label=state)
-    for r in rows:
-        ax.annotate(f"{r['velocity_ratio']:.2g}", (r["reactive_compliance"] * 1e10, r["off_rate"]),
-                    textcoords="offset points", xytext=(10, 8), fontsize=8)
-    ax.set(xscale="log", yscale="log", xlabel="reactive compliance r0 [A]", ylabel="unstressed off-rate k_r0 [1/s]",
-           xlim=(0.05, 2.5), ylim=(0.3, 300), title="adhesion states (labels: V / V_free, last half of the run)")
-    ax.grid(alpha=0.3, which="both")
+    draw_adhesion_states(ax, rows)  # the full diagram's markers and labels (scenes/state_diagram.py)
+    ax.set(xlim=(0.05, 2.5), ylim=(0.3, 300), title="adhesion states (labels: V / V_free, last half of the run)")
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     fig.tight_layout()
     fig.savefig(path, dpi=120)

@@ -18,8 +18,9 @@ from pathlib import Path
 
 
 
-from warpbem.app.adhesion_states import STATES, classify
+from warpbem.app.adhesion_states import classify
 from warpbem.app.io import open_result
+from warpbem.app.plotting import draw_adhesion_states
 
 HERE = Path(__file__).resolve().parent
 
@@ -45,20 +46,10 @@ def chart(rows, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    marks = {"no adhesion": ("o", "white"), "rolling": ("s", "C1"), "firm adhesion": ("D", "C0")}
     fig, ax = plt.subplots(figsize=(8, 5))
-    for state in STATES:
-        chosen = [r for r in rows if r["state"] == state]
-        if chosen:
-            ax.scatter([r["reactive_compliance"] * 1e10 for r in chosen], [r["off_rate"] for r in chosen], s=160,
-                       marker=marks[state][0], facecolor=marks[state][1], edgecolor="k", label=state)
-    for r in rows:
-        ax.annotate(f"{r['velocity_ratio']:.2g}", (r["reactive_compliance"] * 1e10, r["off_rate"]),
-                    textcoords="offset points", xytext=(9, 6), fontsize=7)
+    draw_adhesion_states(ax, rows)
     ax.plot([0.39], [2.4], "*", color="k", markersize=12, label="thesis Table 4.1 (not run here)")
-    ax.set(xscale="log", yscale="log", xlabel="reactive compliance r0 [A]", ylabel="unstressed off-rate k_r0 [1/s]",
-           title="adhesion state diagram, sigma = 100 dyn/cm (labels: V / V_free, last half)")
-    ax.grid(alpha=0.3, which="both")
+    ax.set_title("adhesion state diagram, sigma = 100 dyn/cm (labels: V / V_free, last half)")
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     fig.tight_layout()
     fig.savefig(path, dpi=120)

@@ -59,6 +59,28 @@ def plot_demo(h5_path, png_path=None) -> Path:
     return png_path
 
 
+STATE_MARKS = {"no adhesion": ("o", "white"), "rolling": ("s", "C1"), "firm adhesion": ("D", "C0")}
+
+
+def draw_adhesion_states(ax, rows) -> None:
+    """The adhesion state diagram's points on ``ax``: each row (off_rate in 1/s,
+    reactive_compliance in m, state and velocity_ratio, as ``adhesion_states.classify`` gives
+    them) a marker of its state on the (r0 in A, k_r0) plane, labelled with its V / V_free; log
+    axes, labels and grid (the caller adds title and legend)."""
+    from .adhesion_states import STATES
+
+    for state in STATES:
+        chosen = [r for r in rows if r["state"] == state]
+        if chosen:
+            ax.scatter([r["reactive_compliance"] * 1e10 for r in chosen], [r["off_rate"] for r in chosen], s=160,
+                       marker=STATE_MARKS[state][0], facecolor=STATE_MARKS[state][1], edgecolor="k", label=state)
+    for r in rows:
+        ax.annotate(f"{r['velocity_ratio']:.2g}", (r["reactive_compliance"] * 1e10, r["off_rate"]),
+                    textcoords="offset points", xytext=(9, 6), fontsize=7)
+    ax.set(xscale="log", yscale="log", xlabel="reactive compliance r0 [A]", ylabel="unstressed off-rate k_r0 [1/s]")
+    ax.grid(alpha=0.3, which="both")
+
+
 def outline(points: np.ndarray) -> np.ndarray:
     """Closed outline (k + 1, 2) of 2-D points: their convex hull, the silhouette of a convex
     body's projected nodes (the cells of the thesis are convex)."""
