@@ -1,0 +1,93 @@
+"""Where a single solve's time goes at the low-budget end (issue 27 item 2): a free sphere in
+wall shear at h/a = 1.5 and 1.1, built from an existing mesh and solved from scratch, at the
+settings of the low end of the accuracy front. Each setting: the median of 5 solves after a
+warm-up (no profiler), its error against Goldman, Cox & Brenner's exact series
+(``tests/verification/sphere_wall_series.py``), and the share of each phase of the solve in a
+profiled run of 20 solves (cProfile's cumulative times of the functions named in PHASES; the
+phases overlap where one calls another: the refinement lies inside the geometry, and the
+assembly inside GMRES where the matrix is built at its first product).
+
+    python benchmarks/setup_cost.py [--heights 1.5 1.1]
+
+Targets of issue 27: h/a = 1.5 within 1e-3 in under 5 ms, h/a = 1.1 within 1e-2 in under 10 ms.
+"""
+
+import argparse
+import cProfile
+import pstats
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+import warpbem as wb
+from common import print_table, write_csv
+from warpbem.app.progress import Progress
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "verification"))
+from sphere_wall_series import free_sphere_in_shear  # noqa: E402
+
+# (mesh k, density order p, contact refinement ratio or None for p's default)
+SETTINGS = [(2, 1, 0.0), (3, 1, 0.0), (2, 2, 0.0), (2, 2, None), (3, 2, None)]
+# phase: (a file's name ending, a function name) whose cumulative time is the phase's
+PHASES = {"geometry": ("hydro/geometry.py", "from_bodies"),
+          "refinement": ("surfaces/refinement.py", "refine_near_contact"),
+          "assembly": ("kernels/integrals.py", "assemble_entries"),
+          "to device": ("hydro/geometry.py", "to_device"),
+          "LU factors": ("scipy/linalg/_decomp_lu.py", "lu_factor"),
+          "GMRES": ("hydro/deflated.py", "deflated_solve")}
+
+
+def solver(h, mesh, options):
+    return lambda: wb.solve_mobility([wb.Body(mesh, position=(0.0, 0.0, h))], shear_rate=1.0, viscosity=1.0,
+                                     options=options)
+
+
+def phase_shares(solve, repeats=20) -> dict:
+    profile = cProfile.Profile()
+    profile.enable()
+    for _ in range(repeats):
+        solve()
+    profile.disable()
+    stats = pstats.Stats(profile).stats
+    total = sum(v[2] for v in stats.values())  # every function's own time: the run's
+    shares = {}
+    for phase, (ending, name) in PHASES.items():
+        shares[phase] = sum(v[3] for (path, _, func), v in stats.items()
+                            if path.endswith(ending) and func == name) / total
+    return shares
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--heights", type=float, nargs="+", default=[1.5, 1.1])
+    args = parser.parse_args()
+    warnings.simplefilter("ignore", wb.ContactResolutionWarning)  # the settings without refinement, on purpose
+    rows, progress = [], Progress(len(args.heights) * len(SETTINGS))
+    for h in args.heights:
+        exact = free_sphere_in_shear(h)
+        for k, p, ratio in SETTINGS:
+            options = wb.SolverOptions(density_order=p, contact_refinement=ratio)
+            solve = solver(h, wb.mesh.sphere(1.0, k), options)
+            solution = solve()  # compile and warm up
+            times = []
+            for _ in range(5):
+                t = time.perf_counter()
+                solution = solve()
+                times.append(time.perf_counter() - t)
+            u = solution.velocity[0, 0] / h
+            omega = solution.angular_velocity[0, 1]
+            error = max(abs(u / exact["U_over_gdot_h"] - 1), abs(omega / exact["Omega_over_gdot"] - 1))
+            row = {"h/a": h, "k": k, "p": p, "refinement": "default" if ratio is None else ratio,
+                   "unknowns": solution.solution_vector.size, "error": error, "median_ms": 1e3 * np.median(times)}
+            row.update({f"{phase}_%": 100 * share for phase, share in phase_shares(solve).items()})
+            rows.append(row)
+            progress.done(f"h/a = {h}, k = {k}, p = {p}, refinement {row['refinement']}: {row['median_ms']:.1f} ms")
+    print_table(rows, {"error": "{:.1e}", "median_ms": "{:.1f}", **{f"{p}_%": "{:.0f}" for p in PHASES}})
+    print(f"table: {write_csv('setup_cost.csv', rows)}")
+
+
+if __name__ == "__main__":
+    main()
