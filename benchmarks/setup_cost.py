@@ -30,7 +30,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "verif
 from sphere_wall_series import free_sphere_in_shear  # noqa: E402
 
 # (mesh k, density order p, contact refinement ratio or None for p's default)
-SETTINGS = [(2, 1, 0.0), (3, 1, 0.0), (2, 2, 0.0), (2, 2, None), (3, 2, None)]
+SETTINGS = [(2, 1, 0.0), (3, 1, 0.0), (2, 2, 0.0), (2, 2, 0.3), (2, 2, None), (3, 2, None)]
 # phase: (a file's name ending, a function name) whose cumulative time is the phase's
 PHASES = {"geometry": ("hydro/geometry.py", "from_bodies"),
           "refinement": ("surfaces/refinement.py", "refine_near_contact"),

@@ -47,7 +47,13 @@ def make_element_functions(dtype) -> SimpleNamespace:
 
     @wp.func
     def quad9_frame(nodes: wp.array(dtype=vec3), element: int, s: dtype, t: dtype):
-        """Position and tangents x, x_s, x_t at (s, t) of an element."""
+        """Position and tangents x, x_s, x_t at (s, t) of an element. The 1-D values and slopes
+        are taken once per direction rather than once per node (the same products, bit for bit):
+        this map is most of an adaptive assembly's arithmetic."""
+        ls = vec3(lagrange(s, 0), lagrange(s, 1), lagrange(s, 2))
+        lt = vec3(lagrange(t, 0), lagrange(t, 1), lagrange(t, 2))
+        ds = vec3(lagrange_slope(s, 0), lagrange_slope(s, 1), lagrange_slope(s, 2))
+        dt = vec3(lagrange_slope(t, 0), lagrange_slope(t, 1), lagrange_slope(t, 2))
         x = vec3()
         xs = vec3()
         xt = vec3()
@@ -55,11 +61,9 @@ def make_element_functions(dtype) -> SimpleNamespace:
             p = nodes[element * 9 + a]
             i = NODE_S[a]
             j = NODE_T[a]
-            ls = lagrange(s, i)
-            lt = lagrange(t, j)
-            x += p * (ls * lt)
-            xs += p * (lagrange_slope(s, i) * lt)
-            xt += p * (ls * lagrange_slope(t, j))
+            x += p * (ls[i] * lt[j])
+            xs += p * (ds[i] * lt[j])
+            xt += p * (ls[i] * dt[j])
         return x, xs, xt
 
     @wp.func

@@ -22,9 +22,10 @@ def _wp():
 
 
 def indices(values, device):
-    """A device int array of ``values`` (any integer NumPy array or list)."""
+    """A device int array of ``values`` (any integer NumPy array or list), read-only: on the CPU
+    the host array itself (copy=False), with no copy."""
     wp = _wp()
-    return wp.array(np.ascontiguousarray(values, dtype=np.int32), dtype=int, device=device)
+    return wp.array(np.ascontiguousarray(values, dtype=np.int32), dtype=int, device=device, copy=False)
 
 
 def device_lists(lists, device) -> tuple:

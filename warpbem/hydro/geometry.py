@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import runtime
 from ..surfaces import quad9
-from ..surfaces.refinement import refine_near_contact
+from ..surfaces.refinement import element_radius, refine_near_contact
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,10 +63,9 @@ class SurfaceGeometry:
             collocation, normals = centre, quad9.centre_normals(element_nodes)
             areas = np.linalg.norm(area_vectors, axis=-1).sum(axis=1)
         else:
-            s, t = density_points(density_order)
-            n = quad9.shape_functions(s, t)[0]
+            n, ns, nt = _shapes_at_density_points(density_order)
             collocation = np.einsum("qa,eai->eqi", n, element_nodes).reshape(-1, 3)
-            normals = quad9.unit_normals(element_nodes, s, t).reshape(-1, 3)
+            normals = quad9.normals_from_slopes(element_nodes, ns, nt).reshape(-1, 3)
             areas = (np.linalg.norm(area_vectors, axis=-1) @ basis_at_gauss_points(density_order, order)).ravel()
         return cls(
             length_scale=length_scale,
@@ -74,7 +73,7 @@ class SurfaceGeometry:
             body_of_element=np.repeat(np.arange(len(bodies)), counts),
             element_ranges=np.stack([stops - counts, stops], axis=1),
             centres=np.array([b.position for b in bodies]) / length_scale,
-            element_radius=np.linalg.norm(element_nodes - centre[:, None], axis=-1).max(axis=1),
+            element_radius=element_radius(element_nodes),
             qp_positions=positions,
             qp_area_vectors=area_vectors,
             order=order,
@@ -153,8 +152,10 @@ class SurfaceGeometry:
         n = stop - start
         modes = np.zeros((n, 3, 6))
         modes[:, :, :3] = np.eye(3)
-        for axis in range(3):
-            modes[:, :, 3 + axis] = np.cross(np.eye(3)[axis], rho)
+        # e_l x rho, written out (three np.cross calls were most of this function's time)
+        modes[:, 1, 3], modes[:, 2, 3] = -rho[:, 2], rho[:, 1]
+        modes[:, 0, 4], modes[:, 2, 4] = rho[:, 2], -rho[:, 0]
+        modes[:, 0, 5], modes[:, 1, 5] = -rho[:, 1], rho[:, 0]
         return modes.reshape(3 * n, 6)
 
     def to_device(self, kernels, quadrature, device):
@@ -162,11 +163,13 @@ class SurfaceGeometry:
         wp = runtime.init()
         dtype = kernels.green.dtype
 
+        # copy=False: on the CPU the kernels read the host arrays where they are (never written;
+        # the nine copies took a twentieth of a small solve); elsewhere Warp copies them anyway
         def vectors(a):
-            return wp.array(np.ascontiguousarray(a.reshape(-1, 3)), dtype=kernels.green.vec3, device=device)
+            return wp.array(np.ascontiguousarray(a.reshape(-1, 3)), dtype=kernels.green.vec3, device=device, copy=False)
 
         def scalars(a, kind=dtype):
-            return wp.array(np.ascontiguousarray(a), dtype=kind, device=device)
+            return wp.array(np.ascontiguousarray(a), dtype=kind, device=device, copy=False)
 
         counts = self.body_ranges[:, 1] - self.body_ranges[:, 0]
         surf = kernels.Surface()
@@ -204,6 +207,16 @@ def density_points(density_order: int):
     x = quad9.gauss_legendre(density_order)[0]
     s, t = np.meshgrid(x, x, indexing="xy")
     return s.ravel(), t.ravel()
+
+
+@functools.lru_cache(maxsize=None)
+def _shapes_at_density_points(density_order: int):
+    """The QUAD9 shape functions and their s and t derivatives ((p^2, 9) each) at the density's
+    collocation points (remembered, read-only: the same for every solve)."""
+    shapes = quad9.shape_functions(*density_points(density_order))
+    for a in shapes:
+        a.setflags(write=False)
+    return shapes
 
 
 def density_basis(density_order: int, s, t) -> np.ndarray:

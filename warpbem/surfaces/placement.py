@@ -81,6 +81,8 @@ def check_placement(bodies, wall: bool) -> None:
                 f"body {i} touches or crosses the wall z = 0: its lowest point is at"
                 f" z = {lowest:.4g} m (centre at z = {body.position[2]:.4g} m)"
             )
+    if len(bodies) == 1:  # no pair: no bounding spheres, no tree (a third of this check for one body)
+        return
     radii = np.array([np.linalg.norm(s - b.position, axis=1).max() for s, b in zip(samples, bodies)])
     centres = np.array([b.position for b in bodies])
     # pairs whose bounding spheres meet, by a k-d tree: all pairs took seconds for 1000 cells

@@ -46,6 +46,14 @@ def shape_functions(s, t):
     return ls[..., i] * lt[..., j], dls[..., i] * lt[..., j], ls[..., i] * dlt[..., j]
 
 
+def cross(a, b) -> np.ndarray:
+    """np.cross of two (..., 3) arrays, the same products and differences bit for bit, without
+    its axis handling, which took most of its time on one solve's small arrays (22 against 8 us)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
 def _read_only(*arrays):
     for a in arrays:
         a.flags.writeable = False
@@ -92,16 +100,27 @@ def surface_quadrature(element_nodes: np.ndarray, order: int):
     positions = np.einsum("qa,eai->eqi", n, element_nodes)
     x_s = np.einsum("qa,eai->eqi", ns, element_nodes)
     x_t = np.einsum("qa,eai->eqi", nt, element_nodes)
-    return positions, np.cross(x_s, x_t) * weights[None, :, None]
+    return positions, cross(x_s, x_t) * weights[None, :, None]
 
 
 def unit_normals(element_nodes: np.ndarray, s, t) -> np.ndarray:
     """Unit outward normals (E, Q, 3) at the points (s, t) (each of shape (Q,)) of every element."""
     _, ns, nt = shape_functions(np.asarray(s, dtype=float), np.asarray(t, dtype=float))
-    normal = np.cross(np.einsum("qa,eai->eqi", ns, element_nodes), np.einsum("qa,eai->eqi", nt, element_nodes))
+    return normals_from_slopes(element_nodes, ns, nt)
+
+
+def normals_from_slopes(element_nodes: np.ndarray, ns: np.ndarray, nt: np.ndarray) -> np.ndarray:
+    """Unit outward normals (E, Q, 3) of every element at the points where the shape functions'
+    derivatives are ``ns`` and ``nt`` ((Q, 9) each; remembered by callers for fixed points)."""
+    normal = cross(np.einsum("qa,eai->eqi", ns, element_nodes), np.einsum("qa,eai->eqi", nt, element_nodes))
     return normal / np.linalg.norm(normal, axis=-1, keepdims=True)
+
+
+@functools.lru_cache(maxsize=None)
+def _slopes_at_centre():
+    return _read_only(*shape_functions(np.zeros(1), np.zeros(1))[1:])
 
 
 def centre_normals(element_nodes: np.ndarray) -> np.ndarray:
     """Unit outward normals (E, 3) at the element centres (s = t = 0), the collocation points."""
-    return unit_normals(element_nodes, np.zeros(1), np.zeros(1))[:, 0]
+    return normals_from_slopes(element_nodes, *_slopes_at_centre())[:, 0]
