@@ -8,6 +8,7 @@ runs, sweeps, output, command line)."""
 
 from . import units
 from .elastic.deformable import DeformationError, DeformationWarning
+from .hydro.accuracy import AccuracyWarning, ChosenSettings
 from .hydro.frozen import FrozenArraySolver
 from .hydro.linalg import ConvergenceError
 from .hydro.mobility import ContactResolutionWarning, MobilitySolution, MobilitySolver, solve_mobility
@@ -22,4 +23,4 @@ from .surfaces.placement import PlacementError
 __version__ = "0.1.0"
 __all__ = ["mesh", "units", "Body", "Flow", "SolverOptions", "solve_mobility", "MobilitySolver", "FrozenArraySolver",
            "MobilitySolution", "solve_traction", "TractionSolution", "TreecodeOptions", "ConvergenceError", "DeformationError", "DeformationWarning",
-           "MeshError", "PlacementError", "ContactResolutionWarning", "__version__"]
+           "MeshError", "PlacementError", "ContactResolutionWarning", "AccuracyWarning", "ChosenSettings", "__version__"]

@@ -11,6 +11,7 @@ from the data (shear, loads, prescribed motions), forces over mu U0 L.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import warnings
 from dataclasses import dataclass
 
@@ -19,6 +20,7 @@ import numpy as np
 from ..surfaces.body import Body
 from ..surfaces.placement import check_placement
 from ..surfaces.gaps import WALL
+from . import accuracy
 from .block_factors import BlockFactors
 from .completed_double_layer import FORCE_UNIT, TORQUE_UNIT, CompletedDoubleLayer, all_completion_poles
 from .deflated import deflated_solve
@@ -51,6 +53,12 @@ class MobilitySolution:
     operator_mode: str
     solution_vector: np.ndarray  # scaled GMRES unknowns, for a warm start of a similar solve
     reused_bodies: np.ndarray  # per body: operator blocks kept from the previous solve
+    chosen: accuracy.ChosenSettings | None = None  # with an accuracy target: its settings and estimate
+
+    @property
+    def error_estimate(self) -> float | None:
+        """The accuracy target's estimate of the largest relative error (None without a target)."""
+        return None if self.chosen is None else self.chosen.error_estimate
 
 
 def checked_bodies(bodies) -> list:
@@ -97,6 +105,10 @@ class MobilitySolver:
     built if ``unknowns`` (3 per collocation point of the scenes it will solve) is given, else at
     its first solve, from that solve's unknowns; every later solve keeps it, whatever the memory
     does; ``operator_description`` reports it.
+
+    With ``options.accuracy`` each solve first chooses its settings (``accuracy.py``) and hands
+    the bodies, rebuilt on the chosen library meshes, to a solver of those settings, one kept
+    per setting; its solutions carry ``chosen``.
     """
 
     def __init__(self, shear_rate: float = 0.0, viscosity: float = Flow.viscosity, wall: bool = True, device="cpu",
@@ -115,17 +127,34 @@ class MobilitySolver:
         self._factors = BlockFactors() if self.keep_systems else None
         self._last = None  # (CompletedDoubleLayer, solution vector, speed, bodies key) of the previous solve
         self._warned = set()  # contacts already reported by this solver
+        self._targeted = {}  # accuracy target: (k, p, ratio) -> the solver of that setting
+        self._active = self  # the solver of the last solve (another one's under an accuracy target)
 
     @property
     def mode(self) -> str | None:
         """The operator's discrete form ("dense", "matrix_free", "treecode"), None while "auto"
-        waits for the first solve."""
-        return self._mode
+        waits for the first solve (of the last solve's setting under an accuracy target)."""
+        return self._active._mode
 
     @property
     def operator_description(self) -> str:
         """The operator's mode as decided ("auto (not yet decided)" before the first solve)."""
-        return self._mode or "auto (not yet decided)"
+        return self._active._mode or "auto (not yet decided)"
+
+    def _setting_for(self, bodies):
+        """Under an accuracy target: (the solver of the setting chosen for ``bodies``, the bodies on
+        its meshes, the ChosenSettings)."""
+        options = self.options
+        chosen = accuracy.choose_for(bodies, self.flow.wall, options.accuracy, options.density_order,
+                                     options.refine_fixed_at_wall)
+        key = (chosen.subdivisions, chosen.density_order, chosen.contact_refinement)
+        if key not in self._targeted:
+            options = dataclasses.replace(self.options, accuracy=None, density_order=chosen.density_order,
+                                          contact_refinement=chosen.contact_refinement)
+            self._targeted[key] = MobilitySolver(*dataclasses.astuple(self.flow), self.device, options,
+                                                 keep_systems=self.keep_systems)
+        self._active = self._targeted[key]
+        return self._active, accuracy.rebuilt(bodies, chosen), chosen
 
     def solve(self, bodies, forces=None, torques=None, initial_guess=None,
               check_placement_first: bool = True, background: bool = True, ambient_flow=None,
@@ -151,6 +180,10 @@ class MobilitySolver:
         torques = checked_loads("torques", torques, bodies)
         if check_placement_first:
             check_placement(bodies, self.flow.wall)
+        if self.options.accuracy is not None:
+            solver, bodies, chosen = self._setting_for(bodies)
+            return dataclasses.replace(solver.solve(bodies, forces, torques, initial_guess, False, background,
+                                                    ambient_flow, factor_every_body), chosen=chosen)
         system, key, previous, length = self._system(bodies)
         rhs, speed, force_scale = self._right_side(system, bodies, forces, torques, length, background, ambient_flow)
         if initial_guess is not None and np.shape(initial_guess) != (system.size,):
@@ -175,6 +208,10 @@ class MobilitySolver:
         background's (the flow, no load; ``solve(bodies)``), solved with them and started from the
         previous solve's solution as ``solve`` starts. The bodies' placement is not checked."""
         bodies = checked_bodies(bodies)
+        if self.options.accuracy is not None:
+            solver, bodies, chosen = self._setting_for(bodies)
+            return [dataclasses.replace(solution, chosen=chosen)
+                    for solution in solver.solve_loads(bodies, forces, torques, factor_every_body, with_background)]
         loads = [(checked_loads("forces", f, bodies), checked_loads("torques", t, bodies))
                  for f, t in zip(forces, torques)]
         if with_background:
@@ -298,13 +335,15 @@ class MobilitySolver:
         other._kept = KeptBlocks() if self.keep_systems else None
         other._factors = BlockFactors() if self.keep_systems else None
         other._last, other._warned = None, set()
+        other._targeted, other._active = {}, other
         return other
 
     @property
     def last_system(self):
         """(CompletedDoubleLayer, scaled solution, velocity scale in m/s) of the last ordinary
         solve (``keep_systems``), or None: the density a caller evaluates elsewhere (``frozen.py``)."""
-        return None if self._last is None else self._last[:3]
+        last = self._active._last
+        return None if last is None else last[:3]
 
     def _warn_unresolved(self, geometry, length):
         """Warn once per contact (for the life of this solver) that is closer than the contact

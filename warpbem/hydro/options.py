@@ -99,6 +99,12 @@ class SolverOptions:
         kind=float, low=0.0, high=20.0)
     refine_fixed_at_wall: bool = option(True, "refine fixed bodies for their own gap to the wall (false: a ~1 %"
                                         " effect on free cells in recruitment scenes at ~1/90 of the cost)")
+    accuracy: float | None = option(
+        None, "requested relative accuracy of the bodies' motion and loads: each solve picks the cheapest mesh"
+        " subdivisions (library meshes: sphere, spheroid, adherent shapes), density order and contact refinement"
+        " that reach it by the measured error model (hydro/accuracy.py, benchmarks/error_model.py) and reports"
+        " its error estimate. With it, density_order may be given (the choice keeps it) and contact_refinement"
+        " may not. None: the settings as given", kind=float, low=1e-6, high=0.5)
     tolerance: float | None = option(None, "GMRES relative residual. Default by dtype: 1e-8 for float64, 1e-6 for"
                                      " float32", kind=float, low=0.0, high=0.1, low_open=True)
     max_iterations: int = option(600, "GMRES iterations before a ConvergenceError", low=1, high=1e6)
@@ -153,12 +159,20 @@ class SolverOptions:
         if self.many_body != "none" and self.grand_mobility != "pairs":
             raise OptionError(f"many_body: {self.many_body!r} corrects the pairs' grand mobility; it needs"
                               " grand_mobility = 'pairs' (the whole system's holds every cell already)")
+        if self.accuracy is not None and self.contact_refinement is not None:
+            raise OptionError("contact_refinement: the accuracy target chooses it; give one or the other")
+        if self.accuracy is not None and self.density_order == 3:
+            raise OptionError("density_order: the accuracy target's error model holds densities 1 and 2, not 3")
         if self.reuse_interaction is not None and not self.reuse_interaction >= self.reuse_tolerance > 0:
             raise OptionError(f"reuse_interaction: {self.reuse_interaction:g} is outside the allowed range"
                               f" [{max(self.reuse_tolerance, 1e-12):g}, 1e-06] (>= reuse_tolerance > 0)")
 
     def resolved(self, time_stepping: bool = False) -> "SolverOptions":
-        """These options with the context defaults filled in (module docstring)."""
+        """These options with the context defaults filled in (module docstring); with an accuracy
+        target the density order and refinement stay open for it (``accuracy.py``)."""
+        if self.accuracy is not None:
+            tolerance = DEFAULT_TOLERANCE[self.dtype] if self.tolerance is None else self.tolerance
+            return dataclasses.replace(self, tolerance=tolerance)
         order = self.density_order or (TIME_STEPPING_DENSITY_ORDER if time_stepping else SOLVE_DENSITY_ORDER)
         refinement = DEFAULT_CONTACT_REFINEMENT[order] if self.contact_refinement is None else self.contact_refinement
         tolerance = DEFAULT_TOLERANCE[self.dtype] if self.tolerance is None else self.tolerance

@@ -17,8 +17,10 @@ File format (``save``/``load``, plain text, ``#`` starts a comment)::
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -32,8 +34,15 @@ class MeshError(ValueError):
 
 @dataclass(frozen=True, eq=False)
 class Mesh:
+    """``nodes`` and ``elements`` (module docstring). A library mesh (``sphere``, ``spheroid``,
+    ``shapes.adherent_cell``) also knows its ``subdivisions`` k and the ``recipe`` that builds
+    the same surface at another k (``at_subdivisions``), so that a solve with an accuracy target
+    can choose the mesh (hydro/accuracy.py); a mesh read from a file or deformed has neither."""
+
     nodes: np.ndarray  # (n_nodes, 3) float64, metres
     elements: np.ndarray  # (n_elements, 9) int64
+    subdivisions: int | None = None
+    recipe: Callable[[int], "Mesh"] | None = field(default=None, repr=False)
 
     def __post_init__(self):
         nodes = np.ascontiguousarray(self.nodes, dtype=float)
@@ -127,6 +136,15 @@ class Mesh:
         object.__setattr__(self, "_checked", True)
         return self
 
+    def at_subdivisions(self, k: int) -> "Mesh":
+        """The same library surface with k subdivisions (this mesh itself at its own k)."""
+        if k == self.subdivisions:
+            return self
+        if self.recipe is None:
+            raise MeshError("this mesh was not built by a library generator (sphere, spheroid, adherent_cell),"
+                            " so it cannot be rebuilt at another number of subdivisions")
+        return self.recipe(k)
+
     def transformed(self, rotation: np.ndarray | None = None, scale=1.0) -> "Mesh":
         """Mesh with nodes x -> rotation @ (scale * x); scale may be a number or a 3-vector."""
         nodes = self.nodes * np.asarray(scale, dtype=float)
@@ -200,7 +218,8 @@ def sphere(radius: float, subdivisions: int = 4, projection: str = "equiangular"
     _, first, inverse = np.unique(
         np.round(points / radius, 12), axis=0, return_index=True, return_inverse=True
     )
-    return Mesh(points[first], np.asarray(inverse).ravel()[np.array(elements)])
+    return Mesh(points[first], np.asarray(inverse).ravel()[np.array(elements)], k,
+                partial(sphere, radius, projection=projection, pole_grading=pole_grading))
 
 
 def _graded_towards_south_pole(points: np.ndarray, grading: float) -> np.ndarray:
@@ -221,7 +240,8 @@ def spheroid(radius: float, aspect_ratio: float, subdivisions: int = 4) -> Mesh:
     ``aspect_ratio * radius`` (oblate below 1, prolate above; thesis fig. 2.4b)."""
     radius = _positive_number("radius", radius)
     aspect_ratio = _positive_number("aspect_ratio", aspect_ratio)
-    return sphere(radius, subdivisions).transformed(scale=(1.0, 1.0, aspect_ratio))
+    unit = sphere(radius, subdivisions).transformed(scale=(1.0, 1.0, aspect_ratio))
+    return Mesh(unit.nodes, unit.elements, unit.subdivisions, partial(spheroid, radius, aspect_ratio))
 
 
 def save(mesh: Mesh, path) -> None:

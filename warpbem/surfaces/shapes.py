@@ -20,6 +20,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
+from functools import partial
+
 from .mesh import Mesh, sphere
 
 SHAPES = {  # centre height (m), exponent above, exponent below
@@ -51,7 +53,14 @@ def adherent_cell(shape: str, radius: float = 5e-6, gap: float = 0.25e-6, subdiv
         return sphere(radius, subdivisions), np.array([0.0, 0.0, radius + gap])
     a = brentq(lambda a: _mapped(unit, a, c, p_top, p_bottom).volume() - target, 0.2 * radius, 5 * radius,
                xtol=1e-15 * radius)
-    return _mapped(unit, a, c, p_top, p_bottom).check(), np.array([0.0, 0.0, height])
+    mapped = _mapped(unit, a, c, p_top, p_bottom).check()
+    return (Mesh(mapped.nodes, mapped.elements, unit.subdivisions, partial(adherent_mesh, shape, radius, gap)),
+            np.array([0.0, 0.0, height]))
+
+
+def adherent_mesh(shape: str, radius: float, gap: float, subdivisions: int) -> Mesh:
+    """The mesh of ``adherent_cell`` alone: its recipe at another number of subdivisions."""
+    return adherent_cell(shape, radius, gap, subdivisions)[0]
 
 
 def write_meshes(folder, subdivisions: int = 4) -> list:

@@ -1,0 +1,114 @@
+"""The accuracy target checked (issue 27 item 1): ``SolverOptions(accuracy=...)`` at heights
+h/a = 1.02 ... 3 above the wall and at gaps 0.04 ... 4 radii between two spheres (the error
+model's data lie between these: benchmarks/error_model.py), against the exact series.
+
+Per target accuracy and case: the setting the target chose, its error estimate, its true error
+(the quantities of error_model.py), estimate / true; its time (one solve from scratch, median
+of 3 after a warm-up) against the cheapest setting of the measured front that reaches the
+accuracy (every setting of the error model solved at that case and timed the same way, in the
+same run). Targets of issue 27: the estimate bounds the true error within a factor 3; the
+chosen setting costs at most 2 times the cheapest.
+
+    python benchmarks/accuracy_target.py [--accuracies 1e-2 1e-3 1e-4] [--parts wall pair]
+
+Writes results/bench/accuracy_target.csv, accuracy_front.csv and accuracy_target.png (estimate
+against true error; cost against the cheapest).
+"""
+
+import argparse
+import warnings
+
+import numpy as np
+
+import warpbem as wb
+from common import output, print_table, pyplot, write_csv
+from error_model import (exact_mobility, exact_pair, measured_mobility, measured_pair, settings, solve_time,
+                         unknowns_of, MAX_UNKNOWNS)
+from warpbem.app.progress import Progress
+
+CASES = {"wall": (0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0),  # h/a - 1
+         "pair": (0.04, 0.1, 0.2, 0.4, 1.0, 2.0, 4.0)}  # surface gap / a
+LIBRARY_MESH = wb.mesh.sphere(1.0, 4)  # what a user builds; the target rebuilds it at its k
+
+
+def true_error(part: str, gap: float, mesh, options) -> tuple[float, object]:
+    """(the largest relative error of the part's quantities, the first solution)."""
+    exact = exact_mobility(1.0 + gap) if part == "wall" else exact_pair(gap)
+    values, solution = (measured_mobility(mesh, 1.0 + gap, options) if part == "wall" else
+                        measured_pair(mesh, gap, options))
+    return max(abs(values[q] / exact[q] - 1) for q in values), solution
+
+
+def front(part: str, gap: float) -> list[dict]:
+    """Every setting of the error model at this case: true error and time."""
+    rows = []
+    for k, p, ratio in settings():
+        mesh, options = wb.mesh.sphere(1.0, k), wb.SolverOptions(density_order=p, contact_refinement=ratio)
+        if unknowns_of(part, mesh, gap, options) > MAX_UNKNOWNS:
+            continue
+        error, _ = true_error(part, gap, mesh, options)
+        rows.append({"part": part, "gap": gap, "k": k, "p": p, "ratio": ratio, "error": error,
+                     "ms": 1e3 * solve_time(part, mesh, gap, options)})
+    return rows
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--accuracies", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4])
+    parser.add_argument("--parts", nargs="+", choices=tuple(CASES), default=list(CASES))
+    args = parser.parse_args()
+    warnings.simplefilter("ignore", wb.ContactResolutionWarning)
+    cases = [(part, gap) for part in args.parts for gap in CASES[part]]
+    rows, fronts, progress = [], [], Progress(len(cases))
+    for part, gap in cases:
+        measured = front(part, gap)
+        fronts += measured
+        for target in args.accuracies:
+            options = wb.SolverOptions(accuracy=target)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always", wb.AccuracyWarning)
+                error, solution = true_error(part, gap, LIBRARY_MESH, options)
+            chosen = solution.chosen
+            reaching = [r for r in measured if r["error"] <= target]
+            cheapest = min(reaching, key=lambda r: r["ms"]) if reaching else None
+            ms = 1e3 * solve_time(part, LIBRARY_MESH, gap, options)
+            rows.append({"part": part, "gap": gap, "accuracy": target, "k": chosen.subdivisions,
+                         "p": chosen.density_order, "ratio": chosen.contact_refinement,
+                         "estimate": chosen.error_estimate, "error": error, "estimate/error": chosen.error_estimate / error,
+                         "ms": ms, "cheapest": "-" if cheapest is None else
+                         f"{cheapest['k']}/{cheapest['p']}/{cheapest['ratio']:g}",
+                         "cheapest_ms": np.nan if cheapest is None else cheapest["ms"],
+                         "cost/cheapest": np.nan if cheapest is None else ms / cheapest["ms"],
+                         "warned": "yes" if caught else ""})
+        progress.done(f"{part} gap {gap}")
+    print_table(rows, {"estimate": "{:.2e}", "error": "{:.2e}", "estimate/error": "{:.2f}", "ms": "{:.1f}",
+                       "cheapest_ms": "{:.1f}", "cost/cheapest": "{:.2f}"})
+    print(f"tables: {write_csv('accuracy_target.csv', rows)}, {write_csv('accuracy_front.csv', fronts)}")
+    chart(rows)
+
+
+def chart(rows: list[dict]) -> None:
+    plt = pyplot()
+    fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4.2))
+    for part, marker in (("wall", "o"), ("pair", "s")):
+        for target, colour in zip(sorted({r["accuracy"] for r in rows}, reverse=True), ("C0", "C1", "C2", "C3")):
+            mine = [r for r in rows if r["part"] == part and r["accuracy"] == target]
+            left.loglog([r["error"] for r in mine], [r["estimate"] for r in mine], marker, color=colour,
+                        label=f"{part}, accuracy {target:g}", mfc="none" if part == "pair" else colour)
+            right.semilogx([r["gap"] for r in mine], [r["cost/cheapest"] for r in mine], marker + "-", color=colour,
+                           mfc="none" if part == "pair" else colour)
+    span = np.array(left.get_xlim())
+    for factor, style in ((1, "k-"), (3, "k--")):
+        left.plot(span, factor * span, style, lw=0.8)
+    left.set(xlabel="true relative error", ylabel="estimate", title="estimate against the exact series (--: 3x)")
+    right.axhline(2.0, color="k", ls="--", lw=0.8)
+    right.set(xlabel="gap / a (wall: h/a - 1)", ylabel="time / cheapest reaching the accuracy",
+              title="cost against the measured front (--: 2x)")
+    left.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(output("accuracy_target.png"), dpi=120)
+    print(f"chart: {output('accuracy_target.png')}")
+
+
+if __name__ == "__main__":
+    main()

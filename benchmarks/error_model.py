@@ -1,0 +1,178 @@
+"""The measured error model behind the accuracy target (issue 27 item 1,
+``warpbem/hydro/accuracy.py``): a sphere's mobility error and solve time against its gap to
+the wall, for every setting the target chooses among (mesh subdivisions k, density order p,
+contact refinement ratio).
+
+Per setting and gap, the solve's error against the exact series of
+``tests/verification/sphere_wall_series.py``, all quantities from one system
+(``MobilitySolver.solve_loads``), and the time of one solve from scratch (new bodies from an
+existing mesh, the set-up included; median of 3 after a warm-up; one timing above 1 s):
+
+* wall: a sphere at gap h/a - 1 above the wall; the largest relative error of five quantities:
+  the free sphere in shear, U and Omega (Goldman, Cox & Brenner 1967b); the parallel
+  mobilities mu_xx^tt and mu_yy^rr (the inverse of O'Neill's 1964 and Dean & O'Neill's 1963
+  resistance matrix); the normal mobility 1 / (6 pi lambda) (Brenner 1961);
+* pair: two spheres at a surface gap (in radii) in unbounded fluid, pushed along their line of
+  centres together (Stimson & Jeffery 1926) and towards each other (Maude 1961, Brenner 1961);
+  the larger relative error of their two velocities.
+
+The gaps lie between those the target is checked at (h/a 1.02 ... 3 at the wall, gaps 0.04 ...
+4 between two spheres), so that the check (tests/verification/test_accuracy_target.py) tests
+the model's interpolation, not its own data points.
+
+    python benchmarks/error_model.py            # results/bench/error_model.csv
+    python benchmarks/error_model.py --write    # and warpbem/hydro/error_model_table.py
+"""
+
+import argparse
+import statistics
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+import warpbem as wb
+from common import print_table, write_csv
+from warpbem.app.progress import Progress
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "tests" / "verification"))
+import sphere_wall_series as series  # noqa: E402
+
+WALL_GAPS = (0.015, 0.03, 0.07, 0.15, 0.3, 0.7, 1.5, 3.0)  # h/a - 1
+PAIR_GAPS = (0.03, 0.06, 0.14, 0.3, 0.6, 1.4, 3.0, 6.0)  # surface gap / a
+SUBDIVISIONS = (2, 3, 4, 6)
+# refinement ratios by density order: the bilinear density's unknowns grow 4 times faster under
+# refinement, and its ratio 3 takes 37 000 unknowns (131 s) at h/a = 1.015 on the k = 2 sphere
+RATIOS = {1: (0.0, 0.3, 1.1, 3.0), 2: (0.0, 0.3, 0.6, 1.1)}
+MAX_UNKNOWNS = 16000  # settings larger than this at a gap are left out (tens of seconds a solve)
+TABLE = ROOT / "warpbem" / "hydro" / "error_model_table.py"
+
+
+def exact_mobility(h: float) -> dict:
+    """The five quantities at h/a = h for a = 1, mu = 1, gdot = 1 (module docstring)."""
+    r, pi = series.parallel_resistance(h), np.pi
+    mobility = np.linalg.inv([[6 * pi * r["Ft"], -6 * pi * r["Fr"]], [-8 * pi * r["Tt"], 8 * pi * r["Tr"]]])
+    free = series.free_sphere_in_shear(h)
+    return {"U": free["U_over_gdot_h"] * h, "Omega": free["Omega_over_gdot"], "mu_xx": mobility[0, 0],
+            "mu_rr": mobility[1, 1], "mu_zz": 1.0 / (6 * pi * series.brenner_lambda(h))}
+
+
+def exact_pair(gap: float) -> dict:
+    """The two velocities for a unit force on each sphere (a = 1, mu = 1)."""
+    return {"together": 1.0 / (6 * np.pi * series.stimson_jeffery_lambda(1.0 + gap / 2)),
+            "approaching": 1.0 / (6 * np.pi * series.approaching_spheres_lambda(1.0 + gap / 2))}
+
+
+def pair_bodies(mesh, gap: float) -> list:
+    return [wb.Body(mesh, position=(-1.0 - gap / 2, 0, 0)), wb.Body(mesh, position=(1.0 + gap / 2, 0, 0))]
+
+
+def measured_pair(mesh, gap: float, options) -> tuple[dict, object]:
+    """The two velocities from one system (and the first solution)."""
+    solver = wb.MobilitySolver(0.0, 1.0, wall=False, options=options, keep_systems=False)
+    zero = [[0.0, 0.0, 0.0]] * 2
+    together, approaching = solver.solve_loads(pair_bodies(mesh, gap), [[[1, 0, 0], [1, 0, 0]], [[1, 0, 0], [-1, 0, 0]]],
+                                               [zero, zero])
+    return {"together": together.velocity[0, 0], "approaching": approaching.velocity[0, 0]}, together
+
+
+def measured_mobility(mesh, h: float, options) -> tuple[dict, object]:
+    """The five quantities from one system of the solver (and the first solution)."""
+    solver = wb.MobilitySolver(1.0, 1.0, options=options, keep_systems=False)
+    zero = [[0.0, 0.0, 0.0]]
+    background, fx, fz, ty = solver.solve_loads([wb.Body(mesh, position=(0, 0, h))], [[[1, 0, 0]], [[0, 0, 1]], zero],
+                                                [zero, zero, [[0, 1, 0]]], with_background=True)
+    return ({"U": background.velocity[0, 0], "Omega": background.angular_velocity[0, 1], "mu_xx": fx.velocity[0, 0],
+             "mu_rr": ty.angular_velocity[0, 1], "mu_zz": fz.velocity[0, 2]}, background)
+
+
+def solve_time(part: str, mesh, gap: float, options) -> float:
+    """Seconds of one solve from scratch (module docstring's protocol) of a ``part``'s scene."""
+    def solve():
+        t = time.perf_counter()
+        if part == "wall":
+            wb.solve_mobility([wb.Body(mesh, position=(0, 0, 1.0 + gap))], shear_rate=1.0, viscosity=1.0,
+                              options=options)
+        else:
+            wb.solve_mobility(pair_bodies(mesh, gap), viscosity=1.0, wall=False, forces=[[1, 0, 0], [-1, 0, 0]],
+                              options=options)
+        return time.perf_counter() - t
+
+    first = solve()  # compiles and warms up
+    return first if first > 1.0 else statistics.median(solve() for _ in range(3))
+
+
+def settings() -> list[tuple[int, int, float]]:
+    return [(k, p, ratio) for k in SUBDIVISIONS for p in (1, 2) for ratio in RATIOS[p]]
+
+
+def unknowns_of(part: str, mesh, gap: float, options) -> int:
+    """The solve's unknowns without solving (the refined geometry alone)."""
+    from warpbem.hydro.geometry import SurfaceGeometry
+
+    resolved = options.resolved()
+    bodies = [wb.Body(mesh, position=(0, 0, 1.0 + gap))] if part == "wall" else pair_bodies(mesh, gap)
+    geometry = SurfaceGeometry.from_bodies(bodies, resolved.quadrature_order, 1.0, part == "wall",
+                                           resolved.contact_refinement, True, resolved.density_order)
+    return 3 * len(geometry.collocation)
+
+
+def write_table(rows: list[dict], path: Path = TABLE) -> None:
+    """The rows as the Python module the accuracy target reads (no data file to package)."""
+    lines = ['"""The error model of the accuracy target (``accuracy.py``), measured by',
+             "benchmarks/error_model.py on the 2-core CPU, float64 (do not edit: run it with --write).",
+             "",
+             "WALL_GAPS: h/a - 1 of a sphere above the wall; PAIR_GAPS: the surface gap / a of two spheres;",
+             "WALL, PAIR: (k, p, refinement ratio) -> per gap (relative error, unknowns, milliseconds of one",
+             "solve from scratch), None where not measured (over the benchmark's unknowns limit).",
+             '"""', "", f"SUBDIVISIONS = {SUBDIVISIONS}", f"WALL_GAPS = {WALL_GAPS}", f"PAIR_GAPS = {PAIR_GAPS}"]
+    for part, gaps in (("wall", WALL_GAPS), ("pair", PAIR_GAPS)):
+        lines.append(f"{part.upper()} = {{")
+        for setting in settings():
+            by_gap = {r["gap"]: r for r in rows if r["part"] == part and (r["k"], r["p"], r["ratio"]) == setting}
+            cells = [None if g not in by_gap else (float(f"{by_gap[g]['error']:.3g}"), by_gap[g]["unknowns"],
+                                                    float(f"{by_gap[g]['ms']:.3g}")) for g in gaps]
+            lines.append(f"    {setting}: (")
+            lines += [f"        {c}," for c in cells]
+            lines.append("    ),")
+        lines.append("}")
+    path.write_text("\n".join(lines) + "\n")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--write", action="store_true", help=f"write {TABLE.relative_to(ROOT)}")
+    parser.add_argument("--parts", nargs="+", choices=("wall", "pair"), default=["wall", "pair"])
+    args = parser.parse_args()
+    warnings.simplefilter("ignore", wb.ContactResolutionWarning)  # the settings without refinement, on purpose
+    exact = {("wall", g): exact_mobility(1.0 + g) for g in WALL_GAPS} | {("pair", g): exact_pair(g) for g in PAIR_GAPS}
+    cases = [(part, s, g) for part in args.parts for s in settings()
+             for g in (WALL_GAPS if part == "wall" else PAIR_GAPS)]
+    rows, progress = [], Progress(len(cases))
+    for part, (k, p, ratio), gap in cases:
+        mesh = wb.mesh.sphere(1.0, k)
+        options = wb.SolverOptions(density_order=p, contact_refinement=ratio)
+        what = f"{part}, k = {k}, p = {p}, ratio {ratio}, gap {gap}"
+        if unknowns_of(part, mesh, gap, options) > MAX_UNKNOWNS:
+            progress.done(f"{what}: over {MAX_UNKNOWNS} unknowns, left out")
+            continue
+        values, first = (measured_mobility(mesh, 1.0 + gap, options) if part == "wall" else
+                         measured_pair(mesh, gap, options))
+        errors = {q: abs(values[q] / exact[part, gap][q] - 1) for q in values}
+        worst = max(errors, key=errors.get)
+        rows.append({"part": part, "k": k, "p": p, "ratio": ratio, "gap": gap,
+                     "unknowns": first.solution_vector.size,
+                     "error": errors[worst], "worst": worst, "ms": 1e3 * solve_time(part, mesh, gap, options)})
+        progress.done(f"{what}: {errors[worst]:.1e} ({worst}), {rows[-1]['ms']:.1f} ms")
+    print_table(rows, {"error": "{:.2e}", "ms": "{:.1f}"})
+    print(f"table: {write_csv('error_model.csv', rows)}")
+    if args.write:
+        write_table(rows)
+        print(f"model: {TABLE}")
+
+
+if __name__ == "__main__":
+    main()

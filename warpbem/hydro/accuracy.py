@@ -1,0 +1,252 @@
+"""The accuracy target (``SolverOptions.accuracy``, issue 27): for a requested relative accuracy,
+the cheapest settings of a solve (mesh subdivisions k, density order p, contact refinement
+ratio) and the error estimate of the solve, read from the measured error model
+(``error_model_table.py``, measured by benchmarks/error_model.py against exact series).
+
+The model holds, per setting, a sphere's error and cost at a ladder of gaps: to the wall (the
+largest relative error of its mobility and its motion in shear) and to a second sphere (two
+spheres in unbounded fluid moving along their line of centres, together and towards each
+other: Stimson & Jeffery 1926, Maude 1961 / Brenner 1961). A scene is read at its closest gaps,
+each in units of the body's equivalent radius (two bodies: the mean of theirs), between
+bodies and the wall and between two bodies; between the measured gaps the error and the cost
+are interpolated linearly in log-log, beyond the farthest they are the farthest's (the
+unbounded sphere's error), below the nearest extrapolated along the last segment (with a
+warning). Bodies of other shapes are read as spheres of their equivalent radius (an
+assumption: the model is measured on spheres only). The chosen k applies to the library meshes;
+a mesh that cannot be rebuilt (read from a file, deformed, or with a per-element surface
+velocity) keeps its own and is read at the measured k nearest its size. The estimate is the
+largest of the bodies' (a free body's motion, a fixed body's holding load), except that fixed
+bodies left unrefined at the wall (``refine_fixed_at_wall`` false, e.g. the adherent cells of
+the recruitment scenes) count as far from it: their holding loads are then outside the
+estimate, and so is that option's effect on the free cells (about 1 % in the recruitment
+scenes: ``SolverOptions.refine_fixed_at_wall``).
+
+Gaps are measured between mesh nodes (which lie on the surfaces): exact at a sphere's poles,
+at most the sag of an element above the true gap elsewhere.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..surfaces import refinement
+from ..surfaces.mesh import sphere
+from . import error_model_table as table
+
+
+class AccuracyWarning(UserWarning):
+    """The scene lies outside the measured error model: the estimate is extrapolated."""
+
+
+@dataclass(frozen=True)
+class ChosenSettings:
+    """The settings an accuracy target chose for a solve, and what the model predicts of it.
+
+    subdivisions: the library meshes' k (None: the meshes were kept as given); density_order,
+    contact_refinement: as in ``SolverOptions``; error_estimate: the predicted largest relative
+    error of the bodies' motion and loads; wall_gap, body_gap: the scene's closest gaps it was
+    read at (in equivalent radii; inf where there is none); predicted_ms: the model's time of
+    the setting's sphere solve on the 2-core CPU it was measured on, the cost it was chosen by.
+    """
+
+    subdivisions: int | None
+    density_order: int
+    contact_refinement: float
+    error_estimate: float
+    wall_gap: float
+    body_gap: float
+    predicted_ms: float
+
+
+class _Model:
+    """One table of the model as arrays: the settings, and per setting the logs of the error
+    and of the time at the logs of the gaps (inf where not measured). The error at a gap is
+    taken as at least that at every larger gap: a dip where one quantity's error crosses zero
+    (4.9e-5 at a pair gap of 0.3 on k = 4, p = 2, against 1.3e-4 at 0.6) would otherwise pull the
+    interpolated estimate below the true error around it.
+
+    A refining setting is read as its unrefined sibling (ratio 0) at gaps where the contact
+    refinement would not split the sphere's lowest elements (``refinement_threshold``): there the
+    meshes are the same, and the error jumps at the threshold (h/a = 1.2 on k = 2, p = 2, ratio
+    0.3: 4.7e-2 unrefined, where the refined points on either side, 4.4e-3 at 1.15 and the
+    unrefined 7.5e-3 at 1.3, interpolate to 6e-3)."""
+
+    def __init__(self, measured: dict, gaps: tuple, gap_share: dict):
+        self.settings = list(measured)
+        index = {setting: i for i, setting in enumerate(self.settings)}
+        self.unrefined = np.array([index[(k, p, 0.0)] for k, p, _ in self.settings])
+        self.threshold = np.array([refinement_threshold(k, ratio) / gap_share[p] for k, p, ratio in self.settings])
+        cells = [[(np.inf, None, np.inf) if c is None else c for c in row] for row in measured.values()]
+        self.log_gaps = np.log(gaps)
+        error = np.log([[c[0] for c in row] for row in cells])
+        self.log_error = np.maximum.accumulate(error[:, ::-1], axis=1)[:, ::-1]
+        self.log_ms = np.log([[c[2] for c in row] for row in cells])
+
+    def at(self, gap: float) -> tuple[np.ndarray, np.ndarray]:
+        """(errors, milliseconds) of every setting at ``gap``: log-log interpolation, the farthest
+        gap's beyond it, the nearest segment extrapolated below the nearest gap."""
+        x = self.log_gaps
+        if not np.isfinite(gap) or gap >= np.exp(x[-1]):
+            return np.exp(self.log_error[:, -1]), np.exp(self.log_ms[:, -1])
+        i = int(np.clip(np.searchsorted(x, np.log(gap)) - 1, 0, len(x) - 2))
+        w = (np.log(gap) - x[i]) / (x[i + 1] - x[i])
+        with np.errstate(invalid="ignore"):  # inf - inf where a setting was not measured: nan, left out
+            error = np.exp((1 - w) * self.log_error[:, i] + w * self.log_error[:, i + 1])
+            ms = np.exp((1 - w) * self.log_ms[:, i] + w * self.log_ms[:, i + 1])
+        error, ms = np.nan_to_num(error, nan=np.inf), np.nan_to_num(ms, nan=np.inf)
+        unrefined = gap >= self.threshold
+        error[unrefined], ms[unrefined] = error[self.unrefined[unrefined]], ms[self.unrefined[unrefined]]
+        return error, ms
+
+
+def refinement_threshold(k: int, ratio: float) -> float:
+    """The gap to the wall (in radii) below which the contact refinement at ``ratio`` splits the
+    lowest elements of the k sphere (refinement.refine_near_contact's rule: element radius times
+    the ratio, scaled with the mesh, above the gap)."""
+    elements = sphere(1.0, k).element_nodes()
+    lowest = elements[np.argmin(elements[..., 2].min(axis=1))]
+    scale = max(1.0, refinement.REFERENCE_ELEMENT_SIZE / refinement.relative_element_size(elements))
+    return float(refinement.element_radius(lowest[None])[0] * ratio * scale)
+
+
+# the wall's gap, and half the gap between two bodies for the bilinear density (hydro/geometry.py's
+# body_gap_share), is what the refinement resolves
+WALL_MODEL = _Model(table.WALL, table.WALL_GAPS, {1: 1.0, 2: 1.0})
+PAIR_MODEL = _Model(table.PAIR, table.PAIR_GAPS, {1: 1.0, 2: 0.5})
+
+
+@dataclass(frozen=True)
+class _Term:
+    """One part of a scene's error: a gap (in equivalent radii) read in one table, with the
+    mesh k held (a mesh that cannot be rebuilt) or None (the chosen k), the refinement held off
+    or not, and how many bodies it stands for (the cost counts each)."""
+
+    model: _Model
+    gap: float
+    held_k: int | None = None
+    unrefined: bool = False
+    count: int = 1
+
+
+def scene_terms(bodies, wall: bool, refine_fixed_at_wall: bool = True) -> list[_Term]:
+    """The terms of a scene: per group of bodies with the same held k and refinement, their
+    smallest gap to the wall (the model's error never grows with the gap, so the smallest
+    decides), and the smallest gap between two bodies within reach of each other, read with the
+    coarser of their two meshes (module docstring). Fixed bodies not refined at the wall
+    (``refine_fixed_at_wall`` false) count at the wall without refinement."""
+    radii = np.array([b.mesh.equivalent_radius() for b in bodies])
+    nodes = [b.world_nodes() for b in bodies]
+    held = [None if b.mesh.recipe is not None and b.surface_velocity is None else model_subdivisions(b.mesh)
+            for b in bodies]
+    groups = {}
+    for b, body in enumerate(bodies):
+        unrefined = body.fixed and not refine_fixed_at_wall
+        # a fixed body left unrefined at the wall counts as far from it: its holding load is
+        # then not what the target keeps accurate (module docstring)
+        gap = nodes[b][:, 2].min() / radii[b] if wall and not unrefined else np.inf
+        smallest, count = groups.get((held[b], unrefined), (np.inf, 0))
+        groups[held[b], unrefined] = (min(smallest, gap), count + 1)
+    terms = [_Term(WALL_MODEL, gap, k, unrefined, count) for (k, unrefined), (gap, count) in groups.items()]
+    if len(bodies) > 1:
+        centres = np.array([b.position for b in bodies])
+        outer = np.array([np.linalg.norm(n - c, axis=1).max() for n, c in zip(nodes, centres)])
+        reach = 2 * outer.max() + table.PAIR_GAPS[-1] * radii.max()  # beyond it the model is the unbounded one's
+        closest, pair = np.inf, None
+        for i, j in cKDTree(centres).query_pairs(reach):
+            gap = cKDTree(nodes[i]).query(nodes[j])[0].min() / (0.5 * (radii[i] + radii[j]))
+            if gap < closest:
+                closest, pair = gap, (i, j)
+        if pair is not None:
+            ks = [held[i] for i in pair if held[i] is not None]
+            terms.append(_Term(PAIR_MODEL, closest, min(ks) if ks else None))
+    return terms
+
+
+def model_subdivisions(mesh) -> int:
+    """The model's k for a mesh of ``mesh``'s size: its own k, else the cube-sphere k of as many
+    elements (6 k^2), the nearest measured one."""
+    k = mesh.subdivisions or np.sqrt(mesh.n_elements / 6.0)
+    return min(table.SUBDIVISIONS, key=lambda m: abs(np.log(m / k)))
+
+
+_INDEX = {setting: i for i, setting in enumerate(WALL_MODEL.settings)}  # both tables hold the same settings
+
+
+def _mapped(term: _Term) -> np.ndarray:
+    """Per setting, the index of the setting the term's bodies are solved with: its own, or with
+    the term's held k and refinement."""
+    return np.array([_INDEX[(term.held_k or k, p, 0.0 if term.unrefined else ratio)]
+                     for k, p, ratio in WALL_MODEL.settings])
+
+
+def choose(accuracy: float, terms: list[_Term], density_order: int | None = None) -> ChosenSettings:
+    """The cheapest measured setting whose predicted error (the largest of the ``terms``') is
+    within ``accuracy``, with ``density_order`` held if given; the most accurate one if none
+    reaches it (with a warning). The cost: the terms' times, each times its count."""
+    allowed = np.array([density_order in (None, p) for _, p, _ in WALL_MODEL.settings])
+    errors, ms = [], np.zeros(len(WALL_MODEL.settings))
+    for term in terms:
+        term_error, term_ms = term.model.at(term.gap)
+        index = _mapped(term)
+        errors.append(term_error[index])
+        ms += term.count * term_ms[index]
+    errors = np.array(errors)
+    allowed &= np.all(np.isfinite(errors), axis=0) & np.isfinite(ms)
+    if not allowed.any():
+        raise ValueError(f"the error model has no setting of density order {density_order} for this scene")
+    # each term within the accuracy, or as near it as any setting brings that term (a term no
+    # setting can bring within it, e.g. a held coarse mesh at the wall, does not free the others)
+    reach = np.maximum(accuracy, np.where(allowed, errors, np.inf).min(axis=1))
+    within = allowed & np.all(errors <= reach[:, None] * (1 + 1e-12), axis=0)
+    best = int(np.argmin(np.where(within, ms, np.inf)))
+    error = errors[:, best].max()
+    gaps = ", ".join(f"{t.gap:.3g}" for t in terms)
+    if error > accuracy:
+        warnings.warn(f"no measured setting reaches the accuracy {accuracy:g} at these gaps ({gaps} radii):"
+                      f" solving with the most accurate, estimated at {error:.2g}", AccuracyWarning, stacklevel=5)
+    if any(t.gap < (table.WALL_GAPS if t.model is WALL_MODEL else table.PAIR_GAPS)[0] for t in terms):
+        warnings.warn(f"gaps ({gaps} radii) below the error model's smallest ({table.WALL_GAPS[0]} to the wall,"
+                      f" {table.PAIR_GAPS[0]} between bodies): the error estimate is extrapolated",
+                      AccuracyWarning, stacklevel=5)
+    k, p, ratio = WALL_MODEL.settings[best]
+    wall_gap = min((t.gap for t in terms if t.model is WALL_MODEL), default=np.inf)
+    body_gap = min((t.gap for t in terms if t.model is PAIR_MODEL), default=np.inf)
+    rebuilt_k = k if any(t.held_k is None for t in terms) else None
+    return ChosenSettings(rebuilt_k, p, ratio, float(error), float(wall_gap), float(body_gap), float(ms[best]))
+
+
+def choose_for(bodies, wall: bool, accuracy: float, density_order: int | None = None,
+               refine_fixed_at_wall: bool = True) -> ChosenSettings:
+    """``choose`` for a scene (``scene_terms``); a per-element surface velocity holds the
+    density order at 1 (it is given per element, for the constant density)."""
+    if any(b.surface_velocity is not None for b in bodies):
+        density_order = 1
+    return choose(accuracy, scene_terms(bodies, wall, refine_fixed_at_wall), density_order)
+
+
+# library mesh -> {k: the same surface at k}, for as long as the mesh lives: repeated solves
+# (one solve_mobility after another, time steps) get the same mesh objects, so they neither
+# rebuild them nor lose the operator blocks kept for them
+_REBUILT: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def rebuilt(bodies, chosen: ChosenSettings) -> list:
+    """``bodies`` on the library meshes of the chosen k (the others as they are)."""
+    if chosen.subdivisions is None:
+        return list(bodies)
+    out = []
+    for body in bodies:
+        rebuildable = body.mesh.recipe is not None and body.surface_velocity is None
+        if rebuildable and body.mesh.subdivisions != chosen.subdivisions:
+            levels = _REBUILT.setdefault(body.mesh, {})
+            if chosen.subdivisions not in levels:
+                levels[chosen.subdivisions] = body.mesh.at_subdivisions(chosen.subdivisions)
+            body = dataclasses.replace(body, mesh=levels[chosen.subdivisions])
+        out.append(body)
+    return out
