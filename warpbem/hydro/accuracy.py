@@ -152,7 +152,10 @@ def scene_terms(bodies, wall: bool, refine_fixed_at_wall: bool = True) -> list[_
         gap = nodes[b][:, 2].min() / radii[b] if wall and not unrefined else np.inf
         smallest, count = groups.get((held[b], unrefined), (np.inf, 0))
         groups[held[b], unrefined] = (min(smallest, gap), count + 1)
-    terms = [_Term(WALL_MODEL, gap, k, unrefined, count) for (k, unrefined), (gap, count) in groups.items()]
+    # without a wall a body alone is read as one of two spheres far apart (the pair table's
+    # farthest gap), not as a sphere 4 radii above a wall
+    alone = WALL_MODEL if wall else PAIR_MODEL
+    terms = [_Term(alone, gap, k, unrefined, count) for (k, unrefined), (gap, count) in groups.items()]
     if len(bodies) > 1:
         centres = np.array([b.position for b in bodies])
         outer = np.array([np.linalg.norm(n - c, axis=1).max() for n, c in zip(nodes, centres)])
