@@ -1,0 +1,82 @@
+"""The accuracy target's bookkeeping (hydro/accuracy.py): which meshes it rebuilds, which
+settings it holds, the options it refuses; the physics is checked against exact series in
+tests/verification/test_accuracy_target.py."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import warpbem as wb
+from warpbem.hydro import accuracy
+from warpbem.options import OptionError
+from warpbem.surfaces.shapes import adherent_cell
+
+
+def test_library_meshes_rebuild_the_same_surface_at_another_subdivision():
+    sphere = wb.mesh.sphere(2.0, 3, pole_grading=2.0)
+    np.testing.assert_array_equal(sphere.at_subdivisions(5).nodes, wb.mesh.sphere(2.0, 5, pole_grading=2.0).nodes)
+    assert sphere.at_subdivisions(3) is sphere
+    spheroid = wb.mesh.spheroid(1.0, 0.5, 2)
+    np.testing.assert_array_equal(spheroid.at_subdivisions(4).nodes, wb.mesh.spheroid(1.0, 0.5, 4).nodes)
+    dome, _ = adherent_cell("dome", subdivisions=2)
+    np.testing.assert_array_equal(dome.at_subdivisions(3).nodes, adherent_cell("dome", subdivisions=3)[0].nodes)
+
+
+def test_a_mesh_from_a_file_cannot_be_rebuilt_and_keeps_its_size(tmp_path):
+    wb.mesh.save(wb.mesh.sphere(1.0, 3), tmp_path / "s.q9")
+    loaded = wb.mesh.load(tmp_path / "s.q9")
+    with pytest.raises(wb.MeshError, match="library generator"):
+        loaded.at_subdivisions(4)
+    bodies = [wb.Body(loaded, position=(0, 0, 2.0))]
+    chosen = accuracy.choose_for(bodies, True, 1e-2)
+    assert chosen.subdivisions is None  # nothing rebuilt
+    assert accuracy.rebuilt(bodies, chosen)[0].mesh is loaded
+    terms = accuracy.scene_terms(bodies, True)
+    assert [t.held_k for t in terms] == [3]  # read at its own size
+
+
+def test_a_surface_velocity_holds_the_mesh_and_the_constant_density():
+    mesh = wb.mesh.sphere(1.0, 2)
+    body = wb.Body(mesh, position=(0, 0, 3.0), surface_velocity=np.zeros((mesh.n_elements, 3)))
+    chosen = accuracy.choose_for([body], True, 1e-2)
+    assert chosen.density_order == 1 and chosen.subdivisions is None
+
+
+def test_repeated_solves_reuse_the_rebuilt_meshes():
+    body = wb.Body(wb.mesh.sphere(1.0, 4), position=(0, 0, 2.0))
+    chosen = accuracy.choose_for([body], True, 1e-2)
+    first, second = accuracy.rebuilt([body], chosen), accuracy.rebuilt([body], chosen)
+    assert first[0].mesh is second[0].mesh and first[0].mesh.subdivisions == chosen.subdivisions
+
+
+def test_fixed_cells_unrefined_at_the_wall_count_as_far_from_it():
+    dome, position = adherent_cell("dome", radius=1.0, gap=0.05, subdivisions=2)
+    bodies = [wb.Body(wb.mesh.sphere(1.0, 2), position=(0, 3.0, 2.0)), wb.Body(dome, position=position, fixed=True)]
+    refined = accuracy.scene_terms(bodies, True, refine_fixed_at_wall=True)
+    unrefined = accuracy.scene_terms(bodies, True, refine_fixed_at_wall=False)
+    assert min(t.gap for t in refined if t.model is accuracy.WALL_MODEL) < 0.06
+    # the free sphere alone: 1 radius (of its k = 2 mesh's equivalent sphere)
+    assert min(t.gap for t in unrefined if t.model is accuracy.WALL_MODEL) == pytest.approx(1.0, rel=1e-3)
+
+
+def test_an_accuracy_out_of_reach_warns_and_solves_with_the_most_accurate_setting():
+    with pytest.warns(wb.AccuracyWarning, match="no measured setting reaches"):
+        chosen = accuracy.choose(1e-6, [accuracy._Term(accuracy.WALL_MODEL, 0.5)])
+    errors, _ = accuracy.WALL_MODEL.at(0.5)
+    assert chosen.error_estimate == pytest.approx(errors.min())
+
+
+@pytest.mark.parametrize("changes, message", [(dict(contact_refinement=1.0), "chooses it"),
+                                              (dict(density_order=3), "densities 1 and 2"),
+                                              (dict(), "accuracy")])
+def test_options_the_target_cannot_honour_are_refused(changes, message):
+    with pytest.raises(OptionError, match=message):
+        wb.SolverOptions(accuracy=1e-3 if changes else 0.9, **changes)
+
+
+def test_a_held_density_order_restricts_the_choice():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        chosen = accuracy.choose(1e-2, [accuracy._Term(accuracy.WALL_MODEL, 0.5)], density_order=2)
+    assert chosen.density_order == 2

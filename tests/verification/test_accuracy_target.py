@@ -1,0 +1,81 @@
+"""The accuracy target (``SolverOptions.accuracy``, hydro/accuracy.py, issue 27) against the exact
+series: a sphere above the wall at h/a = 1.05 ... 3 and two spheres in unbounded fluid at gaps
+0.1 ... 4 radii, heights and gaps between those of the error model's data
+(benchmarks/error_model.py), so that these check its interpolation, not its data points.
+
+The quantities are the model's: at the wall the free sphere's U and Omega in shear (Goldman, Cox
+& Brenner 1967b), the parallel mobilities (the inverse of O'Neill 1964 / Dean & O'Neill 1963's
+resistance matrix) and the normal one (Brenner 1961); two spheres pushed together (Stimson &
+Jeffery 1926) and towards each other (Maude 1961). The true error is the largest relative error
+of these. Measured over 42 cases (benchmarks/accuracy_target.py, docs/benchmarks.md) the
+estimate was at least 0.41 of the true error and at most 6.7 times it (at h/a = 1.02, 1e-2).
+"""
+
+import numpy as np
+import pytest
+
+import warpbem as wb
+
+from .sphere_wall_series import (approaching_spheres_lambda, brenner_lambda, free_sphere_in_shear,
+                                 parallel_resistance, stimson_jeffery_lambda)
+
+pytestmark = pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
+LIBRARY_SPHERE = wb.mesh.sphere(1.0, 4)  # a user's mesh; the target rebuilds it at its k
+
+
+def wall_errors(h: float, accuracy: float):
+    """(the largest relative error of the five quantities, the solution's ChosenSettings)."""
+    r, pi = parallel_resistance(h), np.pi
+    mobility = np.linalg.inv([[6 * pi * r["Ft"], -6 * pi * r["Fr"]], [-8 * pi * r["Tt"], 8 * pi * r["Tr"]]])
+    free = free_sphere_in_shear(h)
+    exact = [free["U_over_gdot_h"] * h, free["Omega_over_gdot"], mobility[0, 0], mobility[1, 1],
+             1.0 / (6 * pi * brenner_lambda(h))]
+    solver = wb.MobilitySolver(1.0, 1.0, options=wb.SolverOptions(accuracy=accuracy))
+    zero = [[0.0, 0.0, 0.0]]
+    shear, fx, fz, ty = solver.solve_loads([wb.Body(LIBRARY_SPHERE, position=(0, 0, h))],
+                                           [[[1, 0, 0]], [[0, 0, 1]], zero], [zero, zero, [[0, 1, 0]]],
+                                           with_background=True)
+    measured = [shear.velocity[0, 0], shear.angular_velocity[0, 1], fx.velocity[0, 0], ty.angular_velocity[0, 1],
+                fz.velocity[0, 2]]
+    return max(abs(m / e - 1) for m, e in zip(measured, exact)), shear.chosen
+
+
+def pair_errors(gap: float, accuracy: float):
+    exact = [1.0 / (6 * np.pi * f(1.0 + gap / 2)) for f in (stimson_jeffery_lambda, approaching_spheres_lambda)]
+    solver = wb.MobilitySolver(0.0, 1.0, wall=False, options=wb.SolverOptions(accuracy=accuracy))
+    bodies = [wb.Body(LIBRARY_SPHERE, position=(-1 - gap / 2, 0, 0)), wb.Body(LIBRARY_SPHERE, position=(1 + gap / 2, 0, 0))]
+    zero = [[0.0, 0.0, 0.0]] * 2
+    together, approaching = solver.solve_loads(bodies, [[[1, 0, 0], [1, 0, 0]], [[1, 0, 0], [-1, 0, 0]]], [zero, zero])
+    measured = [together.velocity[0, 0], approaching.velocity[0, 0]]
+    return max(abs(m / e - 1) for m, e in zip(measured, exact)), together.chosen
+
+
+@pytest.mark.parametrize("part, gap, accuracy", [("wall", g, 1e-2) for g in (0.05, 0.1, 0.2, 0.5, 1.0, 2.0)]
+                         + [("wall", g, 1e-3) for g in (0.2, 0.5, 1.0, 2.0)]
+                         + [("pair", g, 1e-2) for g in (0.2, 0.4, 1.0, 2.0, 4.0)]
+                         + [("pair", g, 1e-3) for g in (1.0, 2.0, 4.0)])
+def test_the_error_estimate_bounds_the_true_error_within_a_factor_3(part, gap, accuracy):
+    """The true error at most 3 times the estimate (the estimate's promise), and the estimate not
+    so pessimistic that it is useless (at most 4 times the true error here; 6.7 was measured at
+    h/a = 1.02, module docstring). The solve's error stays within 3 times the accuracy asked."""
+    error, chosen = wall_errors(1.0 + gap, accuracy) if part == "wall" else pair_errors(gap, accuracy)
+    assert error <= 3 * chosen.error_estimate, (error, chosen)
+    assert chosen.error_estimate <= 4 * error, (error, chosen)
+    assert error <= 3 * accuracy and chosen.error_estimate <= accuracy
+
+
+def test_a_solve_to_an_accuracy_is_the_solve_of_the_settings_it_chose():
+    """Rebuilding the library mesh at the chosen k and solving with the chosen density order and
+    refinement gives, digit for digit, what the target's solve gives."""
+    body = wb.Body(LIBRARY_SPHERE, position=(0, 0, 1.3))
+    target = wb.solve_mobility([body], shear_rate=1.0, viscosity=1.0, options=wb.SolverOptions(accuracy=1e-3))
+    chosen = target.chosen
+    assert chosen.subdivisions != LIBRARY_SPHERE.subdivisions  # the case tests a rebuilt mesh
+    direct = wb.solve_mobility([wb.Body(wb.mesh.sphere(1.0, chosen.subdivisions), position=(0, 0, 1.3))],
+                               shear_rate=1.0, viscosity=1.0,
+                               options=wb.SolverOptions(density_order=chosen.density_order,
+                                                        contact_refinement=chosen.contact_refinement))
+    np.testing.assert_array_equal(target.velocity, direct.velocity)
+    np.testing.assert_array_equal(target.angular_velocity, direct.angular_velocity)
+    assert target.error_estimate == chosen.error_estimate and direct.error_estimate is None
+
