@@ -123,9 +123,9 @@ def chart(rows: list[dict]) -> None:
             right.semilogx([r["gap"] for r in mine], [r["cost/cheapest"] for r in mine], marker + "-", color=colour,
                            mfc="none" if part == "pair" else colour)
     span = np.array(left.get_xlim())
-    for factor, style in ((1, "k-"), (3, "k--")):
+    for factor, style in ((1, "k-"), (3, "k--"), (1 / 3, "k--")):
         left.plot(span, factor * span, style, lw=0.8)
-    left.set(xlabel="true relative error", ylabel="estimate", title="estimate against the exact series (--: 3x)")
+    left.set(xlabel="true relative error", ylabel="estimate", title="estimate against the exact series (--: 3x, 1/3)")
     right.axhline(2.0, color="k", ls="--", lw=0.8)
     right.set(xlabel="gap / a (wall: h/a - 1)", ylabel="time / cheapest reaching the accuracy",
               title="cost against the measured front (--: 2x)")

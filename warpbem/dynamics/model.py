@@ -15,7 +15,7 @@ import numpy as np
 from ..forces.interaction import BoundInteraction, Interaction
 from ..hydro.frozen import FrozenArraySolver
 from ..hydro.mobility import MobilitySolver
-from ..hydro.options import Flow, SolverOptions
+from ..hydro.options import TIME_STEPPING_DENSITY_ORDER, Flow, SolverOptions
 from ..options import OptionError, option, validate
 from ..surfaces.body import Body
 from ..surfaces.gaps import outer_radius
@@ -122,8 +122,10 @@ class Model:
 
     @property
     def unknowns(self) -> int:
-        """The mobility problem's unknowns before contact refinement: 3 per density point."""
-        return 3 * self.solver.density_order**2 * sum(len(m.elements) for m in self.meshes)
+        """The mobility problem's unknowns before contact refinement: 3 per density point (with an
+        accuracy target, which chooses the density per solve, at the time-stepping default's)."""
+        order = self.solver.density_order or TIME_STEPPING_DENSITY_ORDER
+        return 3 * order**2 * sum(len(m.elements) for m in self.meshes)
 
     @cached_property
     def fixed_mask(self) -> np.ndarray:

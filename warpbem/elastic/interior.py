@@ -80,7 +80,7 @@ class InteriorElasticity:
         self.shear_modulus, self.poisson_ratio = float(shear_modulus), float(poisson_ratio)
         self.mesh = mesh
         self.length = float(mesh.equivalent_radius())
-        self.options = (options or SolverOptions()).resolved(time_stepping=True)
+        self.options = (options or SolverOptions()).without_accuracy().resolved(time_stepping=True)
         order = self.options.quadrature_order
         self.geometry = SurfaceGeometry.from_bodies([Body(mesh)], order, self.length, False, 0.0)
         quadrature = QuadratureOptions(order=order, adaptive=self.options.adaptive_quadrature)

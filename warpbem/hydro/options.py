@@ -178,6 +178,11 @@ class SolverOptions:
         tolerance = DEFAULT_TOLERANCE[self.dtype] if self.tolerance is None else self.tolerance
         return dataclasses.replace(self, density_order=order, contact_refinement=refinement, tolerance=tolerance)
 
+    def without_accuracy(self) -> "SolverOptions":
+        """These options with no accuracy target, for the solves it does not cover (the traction,
+        the interior elastic problem, the coarse many-body remainder): their own defaults apply."""
+        return dataclasses.replace(self, accuracy=None)
+
     def splits_near_far(self, fixed_cells: int) -> bool:
         """Whether a time-stepped model with ``fixed_cells`` fixed cells takes the near-far split."""
         return self.near_far_split == "on" or (self.near_far_split == "auto" and fixed_cells >= NEAR_FAR_FIXED_CELLS)

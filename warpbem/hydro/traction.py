@@ -172,7 +172,7 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = Flow.visc
     if options.density_order not in (None, 1):
         raise ValueError(f"the traction is constant per element (density_order 1), got density_order"
                          f" {options.density_order}")
-    options = options.resolved(time_stepping=True)
+    options = options.without_accuracy().resolved(time_stepping=True)
     fluid_force = -checked_loads("forces", forces, bodies, fixed_allowed=True)
     fluid_torque = -checked_loads("torques", torques, bodies, fixed_allowed=True)
     check_placement(bodies, wall)
