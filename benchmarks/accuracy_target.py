@@ -7,8 +7,8 @@ First the measured front: every setting of the error model solved at each case, 
 warm-up). Then per target accuracy and case: the setting the target chooses for the case's
 bodies on the k = 4 library sphere (as MobilitySolver chooses it; its solve is the front's solve
 of that setting), its error estimate, its true error, estimate / true, and its time against the
-cheapest setting of the front that reaches the accuracy. Targets of issue 27: the estimate bounds the true error within a factor 3; the
-chosen setting costs at most 2 times the cheapest.
+cheapest setting of the front that reaches the accuracy. Targets of issue 27: the estimate
+bounds the true error within a factor 3; the chosen setting costs at most 2 times the cheapest.
 
     python benchmarks/accuracy_target.py [--accuracies 1e-2 1e-3 1e-4] [--parts wall pair]
     python benchmarks/accuracy_target.py --front results/bench/accuracy_front.csv   # choices only

@@ -74,8 +74,8 @@ def measured_pair(mesh, gap: float, options) -> tuple[dict, object]:
     """The two velocities from one system (and the first solution)."""
     solver = wb.MobilitySolver(0.0, 1.0, wall=False, options=options, keep_systems=False)
     zero = [[0.0, 0.0, 0.0]] * 2
-    together, approaching = solver.solve_loads(pair_bodies(mesh, gap), [[[1, 0, 0], [1, 0, 0]], [[1, 0, 0], [-1, 0, 0]]],
-                                               [zero, zero])
+    pushes = [[[1, 0, 0], [1, 0, 0]], [[1, 0, 0], [-1, 0, 0]]]
+    together, approaching = solver.solve_loads(pair_bodies(mesh, gap), pushes, [zero, zero])
     return {"together": together.velocity[0, 0], "approaching": approaching.velocity[0, 0]}, together
 
 
