@@ -22,6 +22,13 @@ class Column(NamedTuple):
 AT_STATE = "solved at this frame's positions, with every load evaluated there"
 
 
+# frame column -> what it holds, of the accuracy target's ChosenSettings (its field of the same
+# name without the prefix; 0 subdivisions: the meshes as given)
+ACCURACY_COLUMNS = {"accuracy_error_estimate": "the estimated largest relative error",
+                    "accuracy_subdivisions": "the library meshes' subdivisions k (0: as given)",
+                    "accuracy_density_order": "the density order", "accuracy_contact_refinement": "the refinement ratio"}
+
+
 def frame_columns(model) -> dict[str, Column]:
     """The columns of a run's frames for ``model``: the core ones, each interaction's loads
     (``<name>_force``, ``<name>_torque``) and each interaction's own state (``<name>_<column>``)."""
@@ -41,6 +48,10 @@ def frame_columns(model) -> dict[str, Column]:
         "gmres_residual": Column("1", (), "largest relative residual of the solves at this state"),
         "closest_gap": Column("m", (), "exact smallest surface gap of a free body to another body or the wall"),
     }
+    if model.solver.accuracy is not None:  # what the accuracy target chose (hydro/accuracy.py)
+        columns.update({name: Column("1", (), f"{what} of the last mobility solve at or before this state, as the"
+                                     " accuracy target chose it")
+                        for name, what in ACCURACY_COLUMNS.items()})
     for x in model.bound_interactions:
         columns[f"{x.name}_force"] = Column("N", (n, 3), f"load of the {x.name} interaction on each body, {AT_STATE}")
         columns[f"{x.name}_torque"] = Column("N m", (n, 3), f"its torque about each reference point, {AT_STATE}")

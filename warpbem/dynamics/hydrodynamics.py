@@ -125,11 +125,13 @@ class Hydrodynamics:
     """The solves at one state: ``background`` (flow and explicit loads, a ``Motion``) and the
     ``basis`` Responses of the stiff forces, of ``kind`` "coordinates" (a unit force along each
     implicit coordinate) or "bodies" (unit forces, and torques of 1 N times the outer radius, on
-    each free body in turn)."""
+    each free body in turn). ``chosen``: the accuracy target's settings of the last solve (None
+    without a target)."""
 
     background: Motion
     basis: Responses | None
     kind: str
+    chosen: object = None
 
 
 def is_spherical(mesh, rtol: float = 1e-9) -> bool:

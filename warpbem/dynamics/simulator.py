@@ -29,7 +29,7 @@ from ..forces.interaction import ImplicitCoordinates, Loads
 from ..surfaces.gaps import Contacts, GapFinder
 from ..surfaces.placement import PlacementError, check_placement
 from . import integrate
-from .frame import Frame
+from .frame import ACCURACY_COLUMNS, Frame
 from .hydrodynamics import Hydrodynamics, HydrodynamicSolves
 from .implicit import DenseResponse, ImplicitSolveError, ImplicitSystem, MobilityResponse
 from .model import Model, build_solver
@@ -117,6 +117,9 @@ class Evaluation:
         for interaction in self.model.bound_interactions:
             if interaction.name in s.parts:
                 derived.update(interaction.derived_values(s.parts[interaction.name]))
+        chosen = self.hydro.chosen
+        if chosen is not None:
+            derived.update({name: getattr(chosen, name.removeprefix("accuracy_")) or 0 for name in ACCURACY_COLUMNS})
         return Frame(s.time, dt, s.steps, s.positions, s.orientations, velocity, angular_velocity, force, torque,
                      iterations, residual, self.contacts.closest(), loads, s.parts, derived)
 
@@ -183,7 +186,7 @@ class Simulator:
             if c is not None and len(c.values):
                 found.append((x, c))
         if not found:
-            return Hydrodynamics(background, None, "none"), None
+            return Hydrodynamics(background, None, "none", self.hydro.mobility.last_chosen), None
         owners, start = [], 0
         for x, c in found:
             owners.append((x, slice(start, start + len(c.values))))
@@ -208,7 +211,7 @@ class Simulator:
         else:
             loads = coordinates.loads(at_state, ~self.model.fixed_mask)
             coefficients = self.hydro.body_coefficients(loads.force, loads.torque)
-        return (Hydrodynamics(background, basis, kind),
+        return (Hydrodynamics(background, basis, kind, self.hydro.mobility.last_chosen),
                 Implicit(coordinates, owners, system, at_state, coefficients))
 
     def frame(self, state: State) -> Frame:

@@ -149,6 +149,11 @@ class FrozenArraySolver:
         self.near_bodies = np.zeros(0, dtype=int)  # the adherent cells solved in the last call
 
     @property
+    def last_chosen(self):
+        """The accuracy target's ChosenSettings of the last near solve (None without a target)."""
+        return self.inner.last_chosen
+
+    @property
     def operator_description(self) -> str:
         """The near systems' operator, and the split."""
         return f"{self.inner.operator_description}, near-far {self.cutoff * 1e6:g} um"

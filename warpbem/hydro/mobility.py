@@ -129,6 +129,7 @@ class MobilitySolver:
         self._warned = set()  # contacts already reported by this solver
         self._targeted = {}  # accuracy target: (k, p, ratio) -> the solver of that setting
         self._active = self  # the solver of the last solve (another one's under an accuracy target)
+        self.last_chosen = None  # accuracy target: the ChosenSettings of the last solve
 
     @property
     def mode(self) -> str | None:
@@ -153,7 +154,7 @@ class MobilitySolver:
                                           contact_refinement=chosen.contact_refinement)
             self._targeted[key] = MobilitySolver(*dataclasses.astuple(self.flow), self.device, options,
                                                  keep_systems=self.keep_systems)
-        self._active = self._targeted[key]
+        self._active, self.last_chosen = self._targeted[key], chosen
         return self._active, accuracy.rebuilt(bodies, chosen), chosen
 
     def solve(self, bodies, forces=None, torques=None, initial_guess=None,
@@ -335,7 +336,7 @@ class MobilitySolver:
         other._kept = KeptBlocks() if self.keep_systems else None
         other._factors = BlockFactors() if self.keep_systems else None
         other._last, other._warned = None, set()
-        other._targeted, other._active = {}, other
+        other._targeted, other._active, other.last_chosen = {}, other, None
         return other
 
     @property
