@@ -118,17 +118,22 @@ class Mesh:
         Returns the mesh; the result is remembered (a Mesh is immutable)."""
         if getattr(self, "_checked", False):
             return self
-        corners_mid = self.elements[:, [0, 4, 1, 1, 5, 2, 2, 6, 3, 3, 7, 0]].reshape(-1, 4, 3)
-        edges = corners_mid.reshape(-1, 3)
-        forward = {(a, b): m for a, m, b in edges}
-        if len(forward) != len(edges):
+        edges = self.elements[:, [0, 4, 1, 1, 5, 2, 2, 6, 3, 3, 7, 0]].reshape(-1, 3)  # (corner, mid, corner)
+        n = len(self.nodes)
+        forward = edges[:, 0] * n + edges[:, 2]  # each directed edge as one integer
+        order = np.argsort(forward)
+        if np.any(np.diff(forward[order]) == 0):
             raise MeshError("an edge is used twice in the same direction: inconsistent orientation")
-        for (a, b), m in forward.items():
-            if forward.get((b, a)) != m:
-                raise MeshError(
-                    f"edge {a}-{b} is not shared (with its mid node) by exactly two oppositely"
-                    " oriented elements: the surface is open or its elements disagree"
-                )
+        # every edge's reverse must be an edge of another element, with the same mid node
+        backward = edges[:, 2] * n + edges[:, 0]
+        at = order[np.minimum(np.searchsorted(forward, backward, sorter=order), len(order) - 1)]
+        unmatched = (forward[at] != backward) | (edges[at, 1] != edges[:, 1])
+        if unmatched.any():
+            a, _, b = edges[np.argmax(unmatched)]
+            raise MeshError(
+                f"edge {a}-{b} is not shared (with its mid node) by exactly two oppositely"
+                " oriented elements: the surface is open or its elements disagree"
+            )
         if np.any(self.element_areas() <= 0.0):
             raise MeshError("an element has zero area")
         if self.volume() <= 0.0:
@@ -200,25 +205,24 @@ def sphere(radius: float, subdivisions: int = 4, projection: str = "equiangular"
     grid = np.linspace(-1.0, 1.0, 2 * k + 1)
     if projection == "equiangular":
         grid = np.tan(0.25 * np.pi * grid)
-    ref = quad9.REFERENCE_NODES.astype(int) + 1  # offsets 0..2 in the face grid
+    offsets = quad9.REFERENCE_NODES.astype(int) + 1  # (9, 2): each node's offsets 0..2 in the face grid
+    n = 2 * k + 1
+    i, j = np.meshgrid(np.arange(k), np.arange(k), indexing="ij")
+    # element (i, j) of a face: its nodes' rows and columns in the face's n x n grid of points
+    on_face = ((2 * i.reshape(-1, 1) + offsets[:, 0]) * n + 2 * j.reshape(-1, 1) + offsets[:, 1])
     points, elements = [], []
-    for normal, a, b in _CUBE_FACES:
+    for f, (normal, a, b) in enumerate(_CUBE_FACES):
         normal, a, b = (np.array(v, dtype=float) for v in (normal, a, b))
         u, v = np.meshgrid(grid, grid, indexing="ij")
         cube = normal + u[..., None] * a + v[..., None] * b
-        face = cube / np.linalg.norm(cube, axis=-1, keepdims=True)
-        base = sum(len(p) for p in points)
-        points.append(face.reshape(-1, 3))
-        n = 2 * k + 1
-        for i in range(k):
-            for j in range(k):
-                elements.append([base + (2 * i + di) * n + (2 * j + dj) for di, dj in ref])
+        points.append((cube / np.linalg.norm(cube, axis=-1, keepdims=True)).reshape(-1, 3))
+        elements.append(f * n * n + on_face)
     points = _graded_towards_south_pole(np.concatenate(points), pole_grading) * radius
     # merge the nodes that adjacent faces share
     _, first, inverse = np.unique(
         np.round(points / radius, 12), axis=0, return_index=True, return_inverse=True
     )
-    return Mesh(points[first], np.asarray(inverse).ravel()[np.array(elements)], k,
+    return Mesh(points[first], np.asarray(inverse).ravel()[np.concatenate(elements)], k,
                 partial(sphere, radius, projection=projection, pole_grading=pole_grading))
 
 
