@@ -139,11 +139,10 @@ def scene_terms(bodies, wall: bool, refine_fixed_at_wall: bool = True) -> list[_
     smallest gap to the wall (the model's error never grows with the gap, so the smallest
     decides), and the smallest gap between two bodies within reach of each other, read with the
     coarser of their two meshes (module docstring). Fixed bodies not refined at the wall
-    (``refine_fixed_at_wall`` false) count at the wall without refinement."""
+    (``refine_fixed_at_wall`` false) count as far from it, unrefined."""
     radii = np.array([b.mesh.equivalent_radius() for b in bodies])
     nodes = [b.world_nodes() for b in bodies]
-    held = [None if b.mesh.recipe is not None and b.surface_velocity is None else model_subdivisions(b.mesh)
-            for b in bodies]
+    held = [None if rebuildable(b) else model_subdivisions(b.mesh) for b in bodies]
     groups = {}
     for b, body in enumerate(bodies):
         unrefined = body.fixed and not refine_fixed_at_wall
@@ -160,15 +159,23 @@ def scene_terms(bodies, wall: bool, refine_fixed_at_wall: bool = True) -> list[_
         centres = np.array([b.position for b in bodies])
         outer = np.array([np.linalg.norm(n - c, axis=1).max() for n, c in zip(nodes, centres)])
         reach = 2 * outer.max() + table.PAIR_GAPS[-1] * radii.max()  # beyond it the model is the unbounded one's
-        closest, pair = np.inf, None
+        closest, pair, trees = np.inf, None, {}
         for i, j in cKDTree(centres).query_pairs(reach):
-            gap = cKDTree(nodes[i]).query(nodes[j])[0].min() / (0.5 * (radii[i] + radii[j]))
+            if i not in trees:  # each body's tree built once, however many neighbours it has
+                trees[i] = cKDTree(nodes[i])
+            gap = trees[i].query(nodes[j])[0].min() / (0.5 * (radii[i] + radii[j]))
             if gap < closest:
                 closest, pair = gap, (i, j)
         if pair is not None:
             ks = [held[i] for i in pair if held[i] is not None]
             terms.append(_Term(PAIR_MODEL, closest, min(ks) if ks else None))
     return terms
+
+
+def rebuildable(body) -> bool:
+    """Whether the target may put ``body`` on another k: a library mesh, and no per-element
+    surface velocity (given for the mesh's own elements)."""
+    return body.mesh.recipe is not None and body.surface_velocity is None
 
 
 def model_subdivisions(mesh) -> int:
@@ -245,8 +252,7 @@ def rebuilt(bodies, chosen: ChosenSettings) -> list:
         return list(bodies)
     out = []
     for body in bodies:
-        rebuildable = body.mesh.recipe is not None and body.surface_velocity is None
-        if rebuildable and body.mesh.subdivisions != chosen.subdivisions:
+        if rebuildable(body) and body.mesh.subdivisions != chosen.subdivisions:
             levels = _REBUILT.setdefault(body.mesh, {})
             if chosen.subdivisions not in levels:
                 levels[chosen.subdivisions] = body.mesh.at_subdivisions(chosen.subdivisions)

@@ -150,9 +150,9 @@ class MobilitySolver:
                                      options.refine_fixed_at_wall)
         key = (chosen.subdivisions, chosen.density_order, chosen.contact_refinement)
         if key not in self._targeted:
-            options = dataclasses.replace(self.options, accuracy=None, density_order=chosen.density_order,
-                                          contact_refinement=chosen.contact_refinement)
-            self._targeted[key] = MobilitySolver(*dataclasses.astuple(self.flow), self.device, options,
+            settings = dataclasses.replace(options, accuracy=None, density_order=chosen.density_order,
+                                           contact_refinement=chosen.contact_refinement)
+            self._targeted[key] = MobilitySolver(*dataclasses.astuple(self.flow), self.device, settings,
                                                  keep_systems=self.keep_systems)
         self._active, self.last_chosen = self._targeted[key], chosen
         return self._active, accuracy.rebuilt(bodies, chosen), chosen

@@ -244,8 +244,8 @@ def spheroid(radius: float, aspect_ratio: float, subdivisions: int = 4) -> Mesh:
     ``aspect_ratio * radius`` (oblate below 1, prolate above; thesis fig. 2.4b)."""
     radius = _positive_number("radius", radius)
     aspect_ratio = _positive_number("aspect_ratio", aspect_ratio)
-    unit = sphere(radius, subdivisions).transformed(scale=(1.0, 1.0, aspect_ratio))
-    return Mesh(unit.nodes, unit.elements, unit.subdivisions, partial(spheroid, radius, aspect_ratio))
+    scaled = sphere(radius, subdivisions).transformed(scale=(1.0, 1.0, aspect_ratio))
+    return Mesh(scaled.nodes, scaled.elements, scaled.subdivisions, partial(spheroid, radius, aspect_ratio))
 
 
 def save(mesh: Mesh, path) -> None:
