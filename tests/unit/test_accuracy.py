@@ -63,7 +63,7 @@ def test_fixed_cells_unrefined_at_the_wall_count_as_far_from_it():
 def test_an_accuracy_out_of_reach_warns_and_solves_with_the_most_accurate_setting():
     with pytest.warns(wb.AccuracyWarning, match="no measured setting reaches"):
         chosen = accuracy.choose(1e-6, [accuracy._Term(accuracy.WALL_MODEL, 0.5)])
-    errors, _ = accuracy.WALL_MODEL.at(0.5)
+    errors = accuracy.WALL_MODEL.at(0.5)[0]
     assert chosen.error_estimate == pytest.approx(errors.min())
 
 
@@ -80,3 +80,38 @@ def test_a_held_density_order_restricts_the_choice():
         warnings.simplefilter("error")
         chosen = accuracy.choose(1e-2, [accuracy._Term(accuracy.WALL_MODEL, 0.5)], density_order=2)
     assert chosen.density_order == 2
+
+
+@pytest.mark.parametrize("k", [2, 4])
+def test_a_fixed_sphere_has_the_model_sphere_s_unknowns(k):
+    """The fixed bodies' excess over the model (accuracy.fixed_body_excess) counts their own
+    refined meshes: a fixed library sphere at the model's measured gaps (benchmarks/error_model.py
+    places it at h = 1 + gap) has, in every setting, the unknowns the model measured for it (to the
+    interpolation between the gaps its equivalent radius reads them at)."""
+    for gap in accuracy.table.WALL_GAPS[1:4]:
+        body = wb.Body(wb.mesh.sphere(1.0, k), position=(0, 0, 1.0 + gap), fixed=True)
+        modelled = accuracy.WALL_MODEL.at(gap)[2][accuracy._mapped(accuracy._Term(accuracy.WALL_MODEL, gap))]
+        excess = accuracy.fixed_body_excess([body], True)
+        finite = np.isfinite(modelled)
+        assert np.all(np.abs(excess[finite]) <= 0.02 * modelled[finite])
+
+
+def test_an_adherent_dome_s_refined_base_counts_in_the_cost():
+    """A dome 0.05 radius above the wall has its flat base refined: more unknowns than the sphere
+    the error model reads it as wherever the setting refines, as many where it does not; the
+    predicted time grows with them, and only for fixed bodies refined at the wall."""
+    dome, position = adherent_cell("dome", radius=1.0, gap=0.05, subdivisions=4)
+    bodies = [wb.Body(dome, position=position, fixed=True), wb.Body(wb.mesh.sphere(1.0, 4), position=(3.0, 0, 2.0))]
+    excess = accuracy.fixed_body_excess(bodies, True)
+    ratios = np.array([ratio for _, _, ratio in accuracy.WALL_MODEL.settings])
+    np.testing.assert_allclose(excess[ratios == 0], 0.0, atol=1e-6)  # the same element count
+    assert np.all(excess[ratios >= 1.1] > 1000)
+    assert accuracy.fixed_body_excess(bodies, True, refine_fixed_at_wall=False) is None
+    assert accuracy.fixed_body_excess(bodies, False) is None
+    terms = accuracy.scene_terms(bodies, True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", accuracy.AccuracyWarning)
+        plain, counted = accuracy.choose(3e-2, terms), accuracy.choose(3e-2, terms, extra_unknowns=excess)
+    assert (counted.subdivisions, counted.density_order, counted.contact_refinement) == (
+        plain.subdivisions, plain.density_order, plain.contact_refinement)
+    assert counted.predicted_ms > 1.5 * plain.predicted_ms

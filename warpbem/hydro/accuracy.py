@@ -12,9 +12,12 @@ bodies and the wall and between two bodies; between the measured gaps the error 
 are interpolated linearly in log-log, beyond the farthest they are the farthest's (the
 unbounded sphere's error), below the nearest extrapolated along the last segment (with a
 warning). Bodies of other shapes are read as spheres of their equivalent radius (an
-assumption: the model is measured on spheres only). The chosen k applies to the library meshes;
-a mesh that cannot be rebuilt (read from a file, deformed, or with a per-element surface
-velocity) keeps its own and is read at the measured k nearest its size. The estimate is the
+assumption: the model is measured on spheres only), with one exception in the cost: a fixed
+body refined at the wall counts with its own refined mesh's unknowns (``fixed_body_excess``:
+an adherent cell's flat base is refined over far more of its surface than a sphere's pole), the
+time then scaled by the measured time of a solve of that size (``TIME_BY_UNKNOWNS``). The
+chosen k applies to the library meshes; a mesh that cannot be rebuilt (read from a file,
+deformed, or with a per-element surface velocity) keeps its own and is read at the measured k nearest its size. The estimate is the
 largest of the bodies' (a free body's motion, a fixed body's holding load), except that fixed
 bodies left unrefined at the wall (``refine_fixed_at_wall`` false, e.g. the adherent cells of
 the recruitment scenes) count as far from it: their holding loads are then outside the
@@ -52,7 +55,8 @@ class ChosenSettings:
     contact_refinement: as in ``SolverOptions``; error_estimate: the predicted largest relative
     error of the bodies' motion and loads; wall_gap, body_gap: the scene's closest gaps it was
     read at (in equivalent radii; inf where there is none); predicted_ms: the model's time of
-    the setting's sphere solve on the 2-core CPU it was measured on, the cost it was chosen by.
+    the setting's sphere solve on the 2-core CPU it was measured on, scaled for fixed bodies'
+    own refined sizes (module docstring), the cost it was chosen by.
     """
 
     subdivisions: int | None
@@ -82,27 +86,29 @@ class _Model:
         index = {setting: i for i, setting in enumerate(self.settings)}
         self.unrefined = np.array([index[(k, p, 0.0)] for k, p, _ in self.settings])
         self.threshold = np.array([refinement_threshold(k, ratio) / gap_share[p] for k, p, ratio in self.settings])
-        cells = [[(np.inf, None, np.inf) if c is None else c for c in row] for row in measured.values()]
+        cells = [[(np.inf, np.inf, np.inf) if c is None else c for c in row] for row in measured.values()]
         self.log_gaps = np.log(gaps)
         error = np.log([[c[0] for c in row] for row in cells])
         self.log_error = np.maximum.accumulate(error[:, ::-1], axis=1)[:, ::-1]
         self.log_ms = np.log([[c[2] for c in row] for row in cells])
+        self.log_unknowns = np.log([[c[1] for c in row] for row in cells])
 
-    def at(self, gap: float) -> tuple[np.ndarray, np.ndarray]:
-        """(errors, milliseconds) of every setting at ``gap``: log-log interpolation, the farthest
-        gap's beyond it, the nearest segment extrapolated below the nearest gap."""
+    def at(self, gap: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(errors, milliseconds, unknowns) of every setting at ``gap``: log-log interpolation,
+        the farthest gap's beyond it, the nearest segment extrapolated below the nearest gap."""
         x = self.log_gaps
         if not np.isfinite(gap) or gap >= np.exp(x[-1]):
-            return np.exp(self.log_error[:, -1]), np.exp(self.log_ms[:, -1])
+            return np.exp(self.log_error[:, -1]), np.exp(self.log_ms[:, -1]), np.exp(self.log_unknowns[:, -1])
         i = int(np.clip(np.searchsorted(x, np.log(gap)) - 1, 0, len(x) - 2))
         w = (np.log(gap) - x[i]) / (x[i + 1] - x[i])
+        out = []
         with np.errstate(invalid="ignore"):  # inf - inf where a setting was not measured: nan, left out
-            error = np.exp((1 - w) * self.log_error[:, i] + w * self.log_error[:, i + 1])
-            ms = np.exp((1 - w) * self.log_ms[:, i] + w * self.log_ms[:, i + 1])
-        error, ms = np.nan_to_num(error, nan=np.inf), np.nan_to_num(ms, nan=np.inf)
+            for logs in (self.log_error, self.log_ms, self.log_unknowns):
+                out.append(np.nan_to_num(np.exp((1 - w) * logs[:, i] + w * logs[:, i + 1]), nan=np.inf))
         unrefined = gap >= self.threshold
-        error[unrefined], ms[unrefined] = error[self.unrefined[unrefined]], ms[self.unrefined[unrefined]]
-        return error, ms
+        for values in out:
+            values[unrefined] = values[self.unrefined[unrefined]]
+        return tuple(out)
 
 
 def refinement_threshold(k: int, ratio: float) -> float:
@@ -119,6 +125,23 @@ def refinement_threshold(k: int, ratio: float) -> float:
 # body_gap_share), is what the refinement resolves
 WALL_MODEL = _Model(table.WALL, table.WALL_GAPS, {1: 1.0, 2: 1.0})
 PAIR_MODEL = _Model(table.PAIR, table.PAIR_GAPS, {1: 1.0, 2: 0.5})
+
+
+def _time_by_unknowns() -> dict:
+    """Per density order, the coefficients of log(ms) as a quadratic in log(unknowns), fitted
+    to every measured solve of both tables (wall: 127 solves per order, 72-15 552 unknowns; the
+    fit's log residual 0.24-0.35 in standard deviation, at most 0.94: within a factor 2.6)."""
+    fits = {}
+    for p in (1, 2):
+        cells = np.array([c[1:] for tab in (table.WALL, table.PAIR) for (_, q, _), row in tab.items() if q == p
+                          for c in row if c is not None], dtype=float)
+        x = np.log(cells[:, 0])
+        fits[p] = np.polyfit(x, np.log(cells[:, 1]), 2)
+    return fits
+
+
+TIME_BY_UNKNOWNS = _time_by_unknowns()
+LARGEST_MEASURED = int(max(c[1] for tab in (table.WALL, table.PAIR) for row in tab.values() for c in row if c))
 
 
 @dataclass(frozen=True)
@@ -195,17 +218,29 @@ def _mapped(term: _Term) -> np.ndarray:
                      for k, p, ratio in WALL_MODEL.settings])
 
 
-def choose(accuracy: float, terms: list[_Term], density_order: int | None = None) -> ChosenSettings:
+def choose(accuracy: float, terms: list[_Term], density_order: int | None = None,
+           extra_unknowns: np.ndarray | None = None) -> ChosenSettings:
     """The cheapest measured setting whose predicted error (the largest of the ``terms``') is
     within ``accuracy``, with ``density_order`` held if given; the most accurate one if none
-    reaches it (with a warning). The cost: the terms' times, each times its count."""
-    allowed = np.array([density_order in (None, p) for _, p, _ in WALL_MODEL.settings])
-    errors, ms = [], np.zeros(len(WALL_MODEL.settings))
+    reaches it (with a warning). The cost: the terms' times, each times its count, and where
+    ``extra_unknowns`` (per setting: the unknowns the scene has beyond the model's spheres, see
+    ``fixed_body_excess``) is given, scaled by the measured time of a solve of that many more
+    unknowns over that of the model's (``TIME_BY_UNKNOWNS``)."""
+    settings = WALL_MODEL.settings
+    allowed = np.array([density_order in (None, p) for _, p, _ in settings])
+    errors, ms, unknowns = [], np.zeros(len(settings)), np.zeros(len(settings))
     for term in terms:
-        term_error, term_ms = term.model.at(term.gap)
+        term_error, term_ms, term_unknowns = term.model.at(term.gap)
         index = _mapped(term)
         errors.append(term_error[index])
         ms += term.count * term_ms[index]
+        unknowns += term.count * term_unknowns[index]
+    if extra_unknowns is not None:
+        orders = np.array([p for _, p, _ in settings])
+        with np.errstate(invalid="ignore"):  # settings not measured: inf - inf, left out below
+            ms = ms * np.exp(_log_time(np.maximum(unknowns + extra_unknowns, 1.0), orders)
+                             - _log_time(unknowns, orders))
+        ms = np.nan_to_num(ms, nan=np.inf)
     errors = np.array(errors)
     allowed &= np.all(np.isfinite(errors), axis=0) & np.isfinite(ms)
     if not allowed.any():
@@ -220,6 +255,10 @@ def choose(accuracy: float, terms: list[_Term], density_order: int | None = None
     if error > accuracy:
         warnings.warn(f"no measured setting reaches the accuracy {accuracy:g} at these gaps ({gaps} radii):"
                       f" solving with the most accurate, estimated at {error:.2g}", AccuracyWarning, stacklevel=5)
+    if extra_unknowns is not None and unknowns[best] + extra_unknowns[best] > LARGEST_MEASURED:
+        warnings.warn(f"the chosen setting solves about {unknowns[best] + extra_unknowns[best]:.0f} unknowns, more than"
+                      f" the error model measured ({LARGEST_MEASURED}): its predicted time, {ms[best] / 1e3:.2g} s, is"
+                      " extrapolated", AccuracyWarning, stacklevel=5)
     if any(t.gap < (table.WALL_GAPS if t.model is WALL_MODEL else table.PAIR_GAPS)[0] for t in terms):
         warnings.warn(f"gaps ({gaps} radii) below the error model's smallest ({table.WALL_GAPS[0]} to the wall,"
                       f" {table.PAIR_GAPS[0]} between bodies): the error estimate is extrapolated",
@@ -231,13 +270,68 @@ def choose(accuracy: float, terms: list[_Term], density_order: int | None = None
     return ChosenSettings(rebuilt_k, p, ratio, float(error), float(wall_gap), float(body_gap), float(ms[best]))
 
 
+def _log_time(unknowns: np.ndarray, orders: np.ndarray) -> np.ndarray:
+    """log(ms) of a solve of ``unknowns`` at each density order (``TIME_BY_UNKNOWNS``)."""
+    return np.array([np.polyval(TIME_BY_UNKNOWNS[p], np.log(n)) for n, p in zip(unknowns, orders)])
+
+
 def choose_for(bodies, wall: bool, accuracy: float, density_order: int | None = None,
                refine_fixed_at_wall: bool = True) -> ChosenSettings:
-    """``choose`` for a scene (``scene_terms``); a per-element surface velocity holds the
-    density order at 1 (it is given per element, for the constant density)."""
+    """``choose`` for a scene (``scene_terms``, ``fixed_body_excess``); a per-element surface
+    velocity holds the density order at 1 (it is given per element, for the constant density)."""
     if any(b.surface_velocity is not None for b in bodies):
         density_order = 1
-    return choose(accuracy, scene_terms(bodies, wall, refine_fixed_at_wall), density_order)
+    excess = fixed_body_excess(bodies, wall, refine_fixed_at_wall)
+    return choose(accuracy, scene_terms(bodies, wall, refine_fixed_at_wall), density_order, excess)
+
+
+# mesh -> {(place, orientation, ratio): its element count after the contact refinement at the wall}
+_REFINED_SIZES: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def refined_element_count(body, mesh, ratio: float) -> int:
+    """The elements of ``mesh`` at ``body``'s place after the contact refinement at ``ratio``
+    for its gap to the wall alone (kept per mesh and place: a fixed body's is asked at every
+    solve)."""
+    if ratio == 0:
+        return mesh.n_elements
+    sizes = _REFINED_SIZES.setdefault(mesh, {})
+    key = (tuple(body.position), tuple(body.orientation), ratio)
+    if key not in sizes:
+        nodes = (mesh.nodes @ body.rotation().T + body.position)[mesh.elements] / mesh.equivalent_radius()
+        sizes[key] = len(refinement.refine_near_contact([nodes], True, ratio)[0][0])
+    return sizes[key]
+
+
+def fixed_body_excess(bodies, wall: bool, refine_fixed_at_wall: bool = True) -> np.ndarray | None:
+    """Per setting, the unknowns the fixed bodies refined at the wall have beyond the spheres
+    the model reads them as, from their own refined meshes (None: no such body). An adherent
+    cell's flat base near the wall is refined over far more of its surface than a sphere's pole
+    at the same gap: a dome at 0.05 radius, k = 6, p = 2, ratio 1.1, has 28 224 unknowns where
+    the sphere model counts about 3 000 (docs/benchmarks.md, "Ask for an accuracy"). A free body
+    moves, so it is read as a sphere as before."""
+    fixed = [b for b in bodies if b.fixed] if wall and refine_fixed_at_wall else []
+    if not fixed:
+        return None
+    excess = np.zeros(len(WALL_MODEL.settings))
+    for body in fixed:
+        gap = body.world_nodes()[:, 2].min() / body.mesh.equivalent_radius()
+        held = None if rebuildable(body) else model_subdivisions(body.mesh)
+        term = _Term(WALL_MODEL, gap, held)
+        modelled = WALL_MODEL.at(gap)[2][_mapped(term)]
+        for s, (k, p, ratio) in enumerate(WALL_MODEL.settings):
+            if np.isfinite(modelled[s]):  # else not measured: the setting is left out anyway
+                mesh = body.mesh if held is not None or body.mesh.subdivisions == k else _mesh_at(body.mesh, k)
+                excess[s] += 3 * p * p * refined_element_count(body, mesh, ratio) - modelled[s]
+    return excess
+
+
+def _mesh_at(mesh, k: int):
+    """The library mesh ``mesh`` at k subdivisions, built once per mesh (``rebuilt``)."""
+    levels = _REBUILT.setdefault(mesh, {})
+    if k not in levels:
+        levels[k] = mesh.at_subdivisions(k)
+    return levels[k]
 
 
 # library mesh -> {k: the same surface at k}, for as long as the mesh lives: repeated solves
@@ -253,9 +347,6 @@ def rebuilt(bodies, chosen: ChosenSettings) -> list:
     out = []
     for body in bodies:
         if rebuildable(body) and body.mesh.subdivisions != chosen.subdivisions:
-            levels = _REBUILT.setdefault(body.mesh, {})
-            if chosen.subdivisions not in levels:
-                levels[chosen.subdivisions] = body.mesh.at_subdivisions(chosen.subdivisions)
-            body = dataclasses.replace(body, mesh=levels[chosen.subdivisions])
+            body = dataclasses.replace(body, mesh=_mesh_at(body.mesh, chosen.subdivisions))
         out.append(body)
     return out

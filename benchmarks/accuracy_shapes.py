@@ -1,0 +1,73 @@
+"""The accuracy target's cost for an adherent cell refined at the wall (issue 27 item 1: shape):
+a fixed dome 0.05 radius above the wall (``adherent_cell("dome")``, k = 4, radius 5 um) and a
+free k = 4 sphere beside it, in shear. Per accuracy, the setting chosen with the sphere model's
+cost alone and with the fixed bodies' own refined unknowns counted
+(``accuracy.fixed_body_excess``), each one's predicted and measured time (one solve, bodies built
+from the existing meshes), its unknowns, and its dome force and sphere velocity against those of
+the other choice.
+
+    python benchmarks/accuracy_shapes.py [--accuracies 3e-2 1e-2 3e-3]
+"""
+
+import argparse
+import time
+import warnings
+
+import numpy as np
+
+import warpbem as wb
+from common import print_table, write_csv
+from warpbem.app.progress import Progress
+from warpbem.hydro import accuracy
+from warpbem.surfaces.shapes import adherent_cell
+
+
+def scene():
+    dome, centre = adherent_cell("dome", subdivisions=4)
+    return [wb.Body(dome, position=tuple(centre), fixed=True),
+            wb.Body(wb.mesh.sphere(5e-6, 4), position=(14e-6, 0.0, 8e-6))]
+
+
+def solved(bodies, chosen):
+    options = wb.SolverOptions(density_order=chosen.density_order, contact_refinement=chosen.contact_refinement)
+    rebuilt = accuracy.rebuilt(bodies, chosen)
+    start = time.perf_counter()
+    solution = wb.solve_mobility(rebuilt, shear_rate=100.0, viscosity=1e-3, options=options)
+    return time.perf_counter() - start, solution
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--accuracies", type=float, nargs="+", default=[3e-2, 1e-2, 3e-3])
+    args = parser.parse_args()
+    warnings.simplefilter("ignore", wb.ContactResolutionWarning)
+    bodies = scene()
+    wb.solve_mobility(bodies, shear_rate=100.0, viscosity=1e-3,  # loads the kernels before any timing
+                      options=wb.SolverOptions(density_order=2, contact_refinement=0.0))
+    rows, progress = [], Progress(2 * len(args.accuracies))
+    for target in args.accuracies:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", accuracy.AccuracyWarning)
+            choices = {"sphere model": accuracy.choose(target, accuracy.scene_terms(bodies, True)),
+                       "own refined sizes": accuracy.choose_for(bodies, True, target)}
+        results = {}
+        for cost, chosen in choices.items():
+            results[cost] = solved(bodies, chosen)
+            progress.done(f"accuracy {target:g}, {cost}: {results[cost][0]:.2f} s")
+        reference = results["own refined sizes"][1]
+        for cost, chosen in choices.items():
+            seconds, solution = results[cost]
+            force = np.linalg.norm(solution.force[0] - reference.force[0]) / np.linalg.norm(reference.force[0])
+            velocity = np.linalg.norm(solution.velocity[1] - reference.velocity[1]) / np.linalg.norm(
+                reference.velocity[1])
+            rows.append({"accuracy": target, "cost read from": cost,
+                         "k/p/ratio": f"{chosen.subdivisions}/{chosen.density_order}/{chosen.contact_refinement:g}",
+                         "estimate": f"{chosen.error_estimate:.1e}", "unknowns": len(solution.solution_vector),
+                         "predicted_s": round(chosen.predicted_ms / 1e3, 3), "measured_s": round(seconds, 2),
+                         "dome force vs other": f"{force:.1e}", "sphere velocity vs other": f"{velocity:.1e}"})
+    print_table(rows)
+    write_csv("accuracy_shapes.csv", rows)
+
+
+if __name__ == "__main__":
+    main()
