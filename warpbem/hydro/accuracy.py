@@ -19,8 +19,8 @@ time then scaled by the measured time of a solve of that size (``TIME_BY_UNKNOWN
 chosen k applies to the library meshes; a mesh that cannot be rebuilt (read from a file,
 deformed, or with a per-element surface velocity) keeps its own and is read at the measured k
 nearest its size. The estimate is the largest of the bodies' (a free body's motion, a fixed
-body's holding load), except that fixed bodies left unrefined at the wall (``refine_fixed_at_wall`` false, e.g. the adherent cells of
-the recruitment scenes) count as far from it: their holding loads are then outside the
+body's holding load), except that fixed bodies left unrefined at the wall
+(``refine_fixed_at_wall`` false, e.g. the adherent cells of the recruitment scenes) count as far from it: their holding loads are then outside the
 estimate, and so is that option's effect on the free cells (about 1 % in the recruitment
 scenes: ``SolverOptions.refine_fixed_at_wall``).
 
