@@ -1,16 +1,18 @@
-"""The accuracy target checked (issue 27 item 1): ``SolverOptions(accuracy=...)`` at heights
-h/a = 1.02 ... 3 above the wall and at gaps 0.04 ... 4 radii between two spheres (the error
-model's data lie between these: benchmarks/error_model.py), against the exact series.
+"""The accuracy target checked (issue 27 item 1): ``SolverOptions(accuracy=...)`` at heights h/a =
+1.02 ... 3 above the wall (a free sphere; a held one, "fixed") and at gaps 0.04 ... 4 radii
+between two spheres (the error model's data lie between these: benchmarks/error_model.py),
+against the exact series.
 
 First the measured front: every setting of the error model solved at each case, its true error
 (the quantities of error_model.py) and its time (one solve from scratch, median of 3 after a
 warm-up). Then per target accuracy and case: the setting the target chooses for the case's
-bodies on the k = 4 library sphere (as MobilitySolver chooses it; its solve is the front's solve
-of that setting), its error estimate, its true error, estimate / true, and its time against the
-cheapest setting of the front that reaches the accuracy. Targets of issue 27: the estimate
-bounds the true error within a factor 3; the chosen setting costs at most 2 times the cheapest.
+bodies on the k = 4 library sphere (as MobilitySolver chooses it; its solve is the front's
+solve of that setting), its error estimate, its true error, estimate / true, and its time
+against the cheapest setting of the front that reaches the accuracy. Targets of issue 27: the
+estimate bounds the true error within a factor 3; the chosen setting costs at most 2 times the
+cheapest.
 
-    python benchmarks/accuracy_target.py [--accuracies 1e-2 1e-3 1e-4] [--parts wall pair]
+    python benchmarks/accuracy_target.py [--accuracies 1e-2 1e-3 1e-4] [--parts wall fixed pair]
     python benchmarks/accuracy_target.py --front results/bench/accuracy_front.csv   # choices only
 
 Writes results/bench/accuracy_target.csv, accuracy_front.csv and accuracy_target.png (estimate
@@ -26,21 +28,25 @@ import numpy as np
 
 import warpbem as wb
 from common import output, print_table, pyplot, write_csv
-from error_model import (exact_mobility, exact_pair, measured_mobility, measured_pair, pair_bodies, settings,
-                         solve_time, unknowns_of, MAX_UNKNOWNS)
+from error_model import (exact_fixed, exact_mobility, exact_pair, fixed_bodies, measured_fixed, measured_mobility,
+                         measured_pair, pair_bodies, settings, solve_time, unknowns_of, MAX_UNKNOWNS)
 from warpbem.app.progress import Progress
 from warpbem.hydro import accuracy
 
 CASES = {"wall": (0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0),  # h/a - 1
+         "fixed": (0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0),  # h/a - 1, a held sphere
          "pair": (0.04, 0.1, 0.2, 0.4, 1.0, 2.0, 4.0)}  # surface gap / a
 LIBRARY_MESH = wb.mesh.sphere(1.0, 4)  # what a user builds; the target rebuilds it at its k
 
 
 def true_error(part: str, gap: float, mesh, options) -> float:
     """The largest relative error of the part's quantities (error_model.py)."""
-    exact = exact_mobility(1.0 + gap) if part == "wall" else exact_pair(gap)
-    values, _ = (measured_mobility(mesh, 1.0 + gap, options) if part == "wall" else
-                 measured_pair(mesh, gap, options))
+    if part == "wall":
+        exact, (values, _) = exact_mobility(1.0 + gap), measured_mobility(mesh, 1.0 + gap, options)
+    elif part == "fixed":
+        exact, (values, _) = exact_fixed(1.0 + gap), measured_fixed(mesh, gap, options)
+    else:
+        exact, (values, _) = exact_pair(gap), measured_pair(mesh, gap, options)
     return max(abs(values[q] / exact[q] - 1) for q in values)
 
 
@@ -59,11 +65,11 @@ def front(part: str, gap: float) -> list[dict]:
 def chosen_for(part: str, gap: float, target: float):
     """The target's choice for the case's bodies on the library mesh, as ``MobilitySolver`` makes
     it (its solve is then the front's solve of that setting: the same meshes, the same options)."""
-    bodies = ([wb.Body(LIBRARY_MESH, position=(0, 0, 1.0 + gap))] if part == "wall"
-              else pair_bodies(LIBRARY_MESH, gap))
+    bodies = {"wall": lambda: [wb.Body(LIBRARY_MESH, position=(0, 0, 1.0 + gap))],
+              "fixed": lambda: fixed_bodies(LIBRARY_MESH, gap), "pair": lambda: pair_bodies(LIBRARY_MESH, gap)}[part]()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", wb.AccuracyWarning)
-        chosen = accuracy.choose_for(bodies, part == "wall", target)
+        chosen = accuracy.choose_for(bodies, part != "pair", target)
     return chosen, bool(caught)
 
 
@@ -115,7 +121,7 @@ def main():
 def chart(rows: list[dict]) -> None:
     plt = pyplot()
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4.2))
-    for part, marker in (("wall", "o"), ("pair", "s")):
+    for part, marker in (("wall", "o"), ("fixed", "^"), ("pair", "s")):
         for target, colour in zip(sorted({r["accuracy"] for r in rows}, reverse=True), ("C0", "C1", "C2", "C3")):
             mine = [r for r in rows if r["part"] == part and r["accuracy"] == target]
             left.loglog([r["error"] for r in mine], [r["estimate"] for r in mine], marker, color=colour,

@@ -12,6 +12,10 @@ existing mesh, the set-up included; median of 3 after a warm-up; one timing abov
   the free sphere in shear, U and Omega (Goldman, Cox & Brenner 1967b); the parallel
   mobilities mu_xx^tt and mu_yy^rr (the inverse of O'Neill's 1964 and Dean & O'Neill's 1963
   resistance matrix); the normal mobility 1 / (6 pi lambda) (Brenner 1961);
+* fixed: a sphere held at gap h/a - 1 above the wall in shear; the larger relative error of
+  the force and the torque that hold it (Goldman, Cox & Brenner 1967b: the fixed sphere's f*
+  and t*), the error of a fixed body's holding load (an adherent cell's) where "wall" is a free
+  body's motion;
 * pair: two spheres at a surface gap (in radii) in unbounded fluid, pushed along their line of
   centres together (Stimson & Jeffery 1926) and towards each other (Maude 1961, Brenner 1961);
   the larger relative error of their two velocities.
@@ -47,6 +51,7 @@ SUBDIVISIONS = (2, 3, 4, 6)
 # refinement ratios by density order: the bilinear density's unknowns grow 4 times faster under
 # refinement, and its ratio 3 takes 37 000 unknowns (131 s) at h/a = 1.015 on the k = 2 sphere
 RATIOS = {1: (0.0, 0.3, 1.1, 3.0), 2: (0.0, 0.3, 0.6, 1.1)}
+PARTS = ("wall", "fixed", "pair")
 MAX_UNKNOWNS = 16000  # settings larger than this at a gap are left out (tens of seconds a solve)
 TABLE = ROOT / "warpbem" / "hydro" / "error_model_table.py"
 
@@ -64,6 +69,22 @@ def exact_pair(gap: float) -> dict:
     """The two velocities for a unit force on each sphere (a = 1, mu = 1)."""
     return {"together": 1.0 / (6 * np.pi * series.stimson_jeffery_lambda(1.0 + gap / 2)),
             "approaching": 1.0 / (6 * np.pi * series.approaching_spheres_lambda(1.0 + gap / 2))}
+
+
+def exact_fixed(h: float) -> dict:
+    """The fluid's force and torque on a sphere held at h/a = h in shear (a = 1, mu = 1, gdot = 1)."""
+    loads = series.fixed_sphere_in_shear(h)
+    return {"F": 6 * np.pi * h * loads["f_star"], "T": 4 * np.pi * loads["t_star"]}
+
+
+def fixed_bodies(mesh, gap: float) -> list:
+    return [wb.Body(mesh, position=(0, 0, 1.0 + gap), fixed=True)]
+
+
+def measured_fixed(mesh, gap: float, options) -> tuple[dict, object]:
+    """The fluid's force and torque on the held sphere: minus the load that holds it."""
+    solution = wb.solve_mobility(fixed_bodies(mesh, gap), shear_rate=1.0, viscosity=1.0, options=options)
+    return {"F": -solution.force[0, 0], "T": -solution.torque[0, 1]}, solution
 
 
 def pair_bodies(mesh, gap: float) -> list:
@@ -96,6 +117,8 @@ def solve_time(part: str, mesh, gap: float, options) -> float:
         if part == "wall":
             wb.solve_mobility([wb.Body(mesh, position=(0, 0, 1.0 + gap))], shear_rate=1.0, viscosity=1.0,
                               options=options)
+        elif part == "fixed":
+            wb.solve_mobility(fixed_bodies(mesh, gap), shear_rate=1.0, viscosity=1.0, options=options)
         else:
             wb.solve_mobility(pair_bodies(mesh, gap), viscosity=1.0, wall=False, forces=[[1, 0, 0], [-1, 0, 0]],
                               options=options)
@@ -114,10 +137,23 @@ def unknowns_of(part: str, mesh, gap: float, options) -> int:
     from warpbem.hydro.geometry import SurfaceGeometry
 
     resolved = options.resolved()
-    bodies = [wb.Body(mesh, position=(0, 0, 1.0 + gap))] if part == "wall" else pair_bodies(mesh, gap)
-    geometry = SurfaceGeometry.from_bodies(bodies, resolved.quadrature_order, 1.0, part == "wall",
+    bodies = [wb.Body(mesh, position=(0, 0, 1.0 + gap))] if part != "pair" else pair_bodies(mesh, gap)
+    geometry = SurfaceGeometry.from_bodies(bodies, resolved.quadrature_order, 1.0, part != "pair",
                                            resolved.contact_refinement, True, resolved.density_order)
     return 3 * len(geometry.collocation)
+
+
+def kept_rows(parts) -> list[dict]:
+    """The rows of ``parts`` as the table now holds them (a --write that measures other parts)."""
+    from warpbem.hydro import error_model_table as table
+
+    rows = []
+    for part in parts:
+        gaps = table.PAIR_GAPS if part == "pair" else table.WALL_GAPS
+        for (k, p, ratio), cells in getattr(table, part.upper()).items():
+            rows += [{"part": part, "k": k, "p": p, "ratio": ratio, "gap": g, "error": c[0], "unknowns": c[1],
+                      "ms": c[2]} for g, c in zip(gaps, cells) if c is not None]
+    return rows
 
 
 def write_table(rows: list[dict], path: Path = TABLE) -> None:
@@ -126,10 +162,11 @@ def write_table(rows: list[dict], path: Path = TABLE) -> None:
              "benchmarks/error_model.py on the 2-core CPU, float64 (do not edit: run it with --write).",
              "",
              "WALL_GAPS: h/a - 1 of a sphere above the wall; PAIR_GAPS: the surface gap / a of two spheres;",
-             "WALL, PAIR: (k, p, refinement ratio) -> per gap (relative error, unknowns, milliseconds of one",
-             "solve from scratch), None where not measured (over the benchmark's unknowns limit).",
+             "WALL (a free sphere), FIXED (a held one), PAIR: (k, p, refinement ratio) -> per gap (relative",
+             "error, unknowns, milliseconds of one solve from scratch), None where not measured (over the",
+             "benchmark's unknowns limit).",
              '"""', "", f"SUBDIVISIONS = {SUBDIVISIONS}", f"WALL_GAPS = {WALL_GAPS}", f"PAIR_GAPS = {PAIR_GAPS}"]
-    for part, gaps in (("wall", WALL_GAPS), ("pair", PAIR_GAPS)):
+    for part, gaps in (("wall", WALL_GAPS), ("fixed", WALL_GAPS), ("pair", PAIR_GAPS)):
         lines.append(f"{part.upper()} = {{")
         for setting in settings():
             by_gap = {r["gap"]: r for r in rows if r["part"] == part and (r["k"], r["p"], r["ratio"]) == setting}
@@ -145,12 +182,15 @@ def write_table(rows: list[dict], path: Path = TABLE) -> None:
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true", help=f"write {TABLE.relative_to(ROOT)}")
-    parser.add_argument("--parts", nargs="+", choices=("wall", "pair"), default=["wall", "pair"])
+    parser.add_argument("--parts", nargs="+", choices=PARTS, default=list(PARTS),
+                        help="the parts to measure; with --write the others are kept from the table as it is")
     args = parser.parse_args()
     warnings.simplefilter("ignore", wb.ContactResolutionWarning)  # the settings without refinement, on purpose
-    exact = {("wall", g): exact_mobility(1.0 + g) for g in WALL_GAPS} | {("pair", g): exact_pair(g) for g in PAIR_GAPS}
+    exact = ({("wall", g): exact_mobility(1.0 + g) for g in WALL_GAPS}
+             | {("fixed", g): exact_fixed(1.0 + g) for g in WALL_GAPS}
+             | {("pair", g): exact_pair(g) for g in PAIR_GAPS})
     cases = [(part, s, g) for part in args.parts for s in settings()
-             for g in (WALL_GAPS if part == "wall" else PAIR_GAPS)]
+             for g in (PAIR_GAPS if part == "pair" else WALL_GAPS)]
     rows, progress = [], Progress(len(cases))
     for part, (k, p, ratio), gap in cases:
         mesh = wb.mesh.sphere(1.0, k)
@@ -159,8 +199,10 @@ def main():
         if unknowns_of(part, mesh, gap, options) > MAX_UNKNOWNS:
             progress.done(f"{what}: over {MAX_UNKNOWNS} unknowns, left out")
             continue
-        values, first = (measured_mobility(mesh, 1.0 + gap, options) if part == "wall" else
-                         measured_pair(mesh, gap, options))
+        measure = {"wall": lambda: measured_mobility(mesh, 1.0 + gap, options),
+                   "fixed": lambda: measured_fixed(mesh, gap, options),
+                   "pair": lambda: measured_pair(mesh, gap, options)}
+        values, first = measure[part]()
         errors = {q: abs(values[q] / exact[part, gap][q] - 1) for q in values}
         worst = max(errors, key=errors.get)
         rows.append({"part": part, "k": k, "p": p, "ratio": ratio, "gap": gap,
@@ -170,7 +212,7 @@ def main():
     print_table(rows, {"error": "{:.2e}", "ms": "{:.1f}"})
     print(f"table: {write_csv('error_model.csv', rows)}")
     if args.write:
-        write_table(rows)
+        write_table(rows + kept_rows([p for p in PARTS if p not in args.parts]))
         print(f"model: {TABLE}")
 
 

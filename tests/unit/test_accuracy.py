@@ -55,9 +55,9 @@ def test_fixed_cells_unrefined_at_the_wall_count_as_far_from_it():
     bodies = [wb.Body(wb.mesh.sphere(1.0, 2), position=(0, 3.0, 2.0)), wb.Body(dome, position=position, fixed=True)]
     refined = accuracy.scene_terms(bodies, True, refine_fixed_at_wall=True)
     unrefined = accuracy.scene_terms(bodies, True, refine_fixed_at_wall=False)
-    assert min(t.gap for t in refined if t.model is accuracy.WALL_MODEL) < 0.06
+    assert min(t.gap for t in refined if t.model is not accuracy.PAIR_MODEL) < 0.06
     # the free sphere alone: 1 radius (of its k = 2 mesh's equivalent sphere)
-    assert min(t.gap for t in unrefined if t.model is accuracy.WALL_MODEL) == pytest.approx(1.0, rel=1e-3)
+    assert min(t.gap for t in unrefined if t.model is not accuracy.PAIR_MODEL) == pytest.approx(1.0, rel=1e-3)
 
 
 def test_an_accuracy_out_of_reach_warns_and_solves_with_the_most_accurate_setting():
@@ -90,7 +90,7 @@ def test_a_fixed_sphere_has_the_model_sphere_s_unknowns(k):
     interpolation between the gaps its equivalent radius reads them at)."""
     for gap in accuracy.table.WALL_GAPS[1:4]:
         body = wb.Body(wb.mesh.sphere(1.0, k), position=(0, 0, 1.0 + gap), fixed=True)
-        modelled = accuracy.WALL_MODEL.at(gap)[2][accuracy._mapped(accuracy._Term(accuracy.WALL_MODEL, gap))]
+        modelled = accuracy.FIXED_MODEL.at(gap)[2][accuracy._mapped(accuracy._Term(accuracy.FIXED_MODEL, gap))]
         excess = accuracy.fixed_body_excess([body], True)
         finite = np.isfinite(modelled)
         assert np.all(np.abs(excess[finite]) <= 0.02 * modelled[finite])
@@ -109,9 +109,20 @@ def test_an_adherent_dome_s_refined_base_counts_in_the_cost():
     assert accuracy.fixed_body_excess(bodies, True, refine_fixed_at_wall=False) is None
     assert accuracy.fixed_body_excess(bodies, False) is None
     terms = accuracy.scene_terms(bodies, True)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", accuracy.AccuracyWarning)
-        plain, counted = accuracy.choose(3e-2, terms), accuracy.choose(3e-2, terms, extra_unknowns=excess)
-    assert (counted.subdivisions, counted.density_order, counted.contact_refinement) == (
-        plain.subdivisions, plain.density_order, plain.contact_refinement)
-    assert counted.predicted_ms > 1.5 * plain.predicted_ms
+    _, plain, _ = accuracy.scene_costs(terms)
+    _, counted, unknowns = accuracy.scene_costs(terms, excess)
+    refined = np.isfinite(plain) & (excess >= 1)  # at least one unknown more
+    assert np.all(counted[refined] > plain[refined])
+    np.testing.assert_array_equal(counted[ratios == 0], plain[ratios == 0])
+    assert np.all(unknowns[refined] > accuracy.scene_costs(terms)[2][refined])
+
+
+def test_a_held_sphere_is_read_by_its_holding_load_and_other_held_shapes_by_a_free_sphere():
+    """accuracy.wall_model: the held sphere's table for a fixed sphere (its nodes on one sphere,
+    translated or turned), the free sphere's for a free body and for a fixed dome."""
+    sphere = wb.mesh.sphere(2.0, 3)
+    dome, position = adherent_cell("dome", radius=1.0, gap=0.05, subdivisions=2)
+    assert accuracy.wall_model(wb.Body(sphere, position=(1.0, 2.0, 3.0), fixed=True,
+                                       orientation=(0.9, 0.1, 0.3, 0.2))) is accuracy.FIXED_MODEL
+    assert accuracy.wall_model(wb.Body(sphere, position=(0, 0, 3.0))) is accuracy.WALL_MODEL
+    assert accuracy.wall_model(wb.Body(dome, position=position, fixed=True)) is accuracy.WALL_MODEL

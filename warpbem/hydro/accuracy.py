@@ -4,7 +4,8 @@ ratio) and the error estimate of the solve, read from the measured error model
 (``error_model_table.py``, measured by benchmarks/error_model.py against exact series).
 
 The model holds, per setting, a sphere's error and cost at a ladder of gaps: to the wall (the
-largest relative error of its mobility and its motion in shear) and to a second sphere (two
+largest relative error of its mobility and its motion in shear; for a fixed sphere that of the
+force and torque holding it in shear, Goldman, Cox & Brenner 1967b, ``wall_model``) and to a second sphere (two
 spheres in unbounded fluid moving along their line of centres, together and towards each other:
 Stimson & Jeffery 1926, Maude 1961 / Brenner 1961). A scene is read at its closest gaps, each
 in units of the body's equivalent radius (two bodies: the mean of theirs), between bodies and
@@ -124,6 +125,7 @@ def refinement_threshold(k: int, ratio: float) -> float:
 # the wall's gap, and half the gap between two bodies for the bilinear density (hydro/geometry.py's
 # body_gap_share), is what the refinement resolves
 WALL_MODEL = _Model(table.WALL, table.WALL_GAPS, {1: 1.0, 2: 1.0})
+FIXED_MODEL = _Model(table.FIXED, table.WALL_GAPS, {1: 1.0, 2: 1.0})
 PAIR_MODEL = _Model(table.PAIR, table.PAIR_GAPS, {1: 1.0, 2: 0.5})
 
 
@@ -172,12 +174,12 @@ def scene_terms(bodies, wall: bool, refine_fixed_at_wall: bool = True) -> list[_
         # a fixed body left unrefined at the wall counts as far from it: its holding load is
         # then not what the target keeps accurate (module docstring)
         gap = nodes[b][:, 2].min() / radii[b] if wall and not unrefined else np.inf
-        smallest, count = groups.get((held[b], unrefined), (np.inf, 0))
-        groups[held[b], unrefined] = (min(smallest, gap), count + 1)
-    # without a wall a body alone is read as one of two spheres far apart (the pair table's
-    # farthest gap), not as a sphere 4 radii above a wall
-    alone = WALL_MODEL if wall else PAIR_MODEL
-    terms = [_Term(alone, gap, k, unrefined, count) for (k, unrefined), (gap, count) in groups.items()]
+        # without a wall a body alone is read as one of two spheres far apart (the pair table's
+        # farthest gap), not as a sphere 4 radii above a wall
+        model = wall_model(body) if wall else PAIR_MODEL
+        smallest, count = groups.get((model, held[b], unrefined), (np.inf, 0))
+        groups[model, held[b], unrefined] = (min(smallest, gap), count + 1)
+    terms = [_Term(model, gap, k, unrefined, count) for (model, k, unrefined), (gap, count) in groups.items()]
     if len(bodies) > 1:
         centres = np.array([b.position for b in bodies])
         outer = np.array([np.linalg.norm(n - c, axis=1).max() for n, c in zip(nodes, centres)])
@@ -195,6 +197,26 @@ def scene_terms(bodies, wall: bool, refine_fixed_at_wall: bool = True) -> list[_
     return terms
 
 
+# mesh -> whether its nodes lie on one sphere (``wall_model``)
+_SPHERICAL: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+SPHERE_TOLERANCE = 1e-3  # largest relative spread of the nodes' distances from their mean
+
+
+def wall_model(body) -> _Model:
+    """The table a body near the wall is read in: a held sphere by the load that holds it
+    (FIXED_MODEL); every other body by a free sphere's motion (WALL_MODEL). A held body of
+    another shape keeps the free sphere's table, the more cautious: beside a k = 4 dome 0.05
+    radius above the wall, the held sphere's table estimated its holding force within 7.8e-2,
+    7.9e-3 and 6.7e-4 where it lay 0.82, 5.4e-2 and 6.4e-3 from the finest solve (its flat base
+    in near contact; docs/benchmarks.md, "Adherent cells refined at the wall")."""
+    if not body.fixed:
+        return WALL_MODEL
+    if body.mesh not in _SPHERICAL:
+        distances = np.linalg.norm(body.mesh.nodes - body.mesh.nodes.mean(axis=0), axis=1)
+        _SPHERICAL[body.mesh] = bool(np.ptp(distances) <= SPHERE_TOLERANCE * distances.mean())
+    return FIXED_MODEL if _SPHERICAL[body.mesh] else WALL_MODEL
+
+
 def rebuildable(body) -> bool:
     """Whether the target may put ``body`` on another k: a library mesh, and no per-element
     surface velocity (given for the mesh's own elements)."""
@@ -208,7 +230,7 @@ def model_subdivisions(mesh) -> int:
     return min(table.SUBDIVISIONS, key=lambda m: abs(np.log(m / k)))
 
 
-_INDEX = {setting: i for i, setting in enumerate(WALL_MODEL.settings)}  # both tables hold the same settings
+_INDEX = {setting: i for i, setting in enumerate(WALL_MODEL.settings)}  # the tables hold the same settings
 
 
 def _mapped(term: _Term) -> np.ndarray:
@@ -218,16 +240,13 @@ def _mapped(term: _Term) -> np.ndarray:
                      for k, p, ratio in WALL_MODEL.settings])
 
 
-def choose(accuracy: float, terms: list[_Term], density_order: int | None = None,
-           extra_unknowns: np.ndarray | None = None) -> ChosenSettings:
-    """The cheapest measured setting whose predicted error (the largest of the ``terms``') is
-    within ``accuracy``, with ``density_order`` held if given; the most accurate one if none
-    reaches it (with a warning). The cost: the terms' times, each times its count, and where
-    ``extra_unknowns`` (per setting: the unknowns the scene has beyond the model's spheres, see
-    ``fixed_body_excess``) is given, scaled by the measured time of a solve of that many more
-    unknowns over that of the model's (``TIME_BY_UNKNOWNS``)."""
+def scene_costs(terms: list[_Term], extra_unknowns: np.ndarray | None = None):
+    """Per term and setting the predicted error, and per setting the predicted time and
+    unknowns: the terms' times, each times its count, and where ``extra_unknowns`` (per
+    setting: the unknowns the scene has beyond the model's spheres, ``fixed_body_excess``) is
+    given, scaled by the measured time of a solve of that many more unknowns over that of the
+    model's (``TIME_BY_UNKNOWNS``)."""
     settings = WALL_MODEL.settings
-    allowed = np.array([density_order in (None, p) for _, p, _ in settings])
     errors, ms, unknowns = [], np.zeros(len(settings)), np.zeros(len(settings))
     for term in terms:
         term_error, term_ms, term_unknowns = term.model.at(term.gap)
@@ -240,8 +259,17 @@ def choose(accuracy: float, terms: list[_Term], density_order: int | None = None
         with np.errstate(invalid="ignore"):  # settings not measured: inf - inf, left out below
             ms = ms * np.exp(_log_time(np.maximum(unknowns + extra_unknowns, 1.0), orders)
                              - _log_time(unknowns, orders))
-        ms = np.nan_to_num(ms, nan=np.inf)
-    errors = np.array(errors)
+        ms, unknowns = np.nan_to_num(ms, nan=np.inf), unknowns + extra_unknowns
+    return np.array(errors), ms, unknowns
+
+
+def choose(accuracy: float, terms: list[_Term], density_order: int | None = None,
+           extra_unknowns: np.ndarray | None = None) -> ChosenSettings:
+    """The cheapest measured setting whose predicted error (the largest of the ``terms``') is
+    within ``accuracy``, with ``density_order`` held if given; the most accurate one if none
+    reaches it (with a warning). The cost: ``scene_costs``."""
+    allowed = np.array([density_order in (None, p) for _, p, _ in WALL_MODEL.settings])
+    errors, ms, unknowns = scene_costs(terms, extra_unknowns)
     allowed &= np.all(np.isfinite(errors), axis=0) & np.isfinite(ms)
     if not allowed.any():
         raise ValueError(f"the error model has no setting of density order {density_order} for this scene")
@@ -255,16 +283,16 @@ def choose(accuracy: float, terms: list[_Term], density_order: int | None = None
     if error > accuracy:
         warnings.warn(f"no measured setting reaches the accuracy {accuracy:g} at these gaps ({gaps} radii):"
                       f" solving with the most accurate, estimated at {error:.2g}", AccuracyWarning, stacklevel=5)
-    if extra_unknowns is not None and unknowns[best] + extra_unknowns[best] > LARGEST_MEASURED:
-        warnings.warn(f"the chosen setting solves about {unknowns[best] + extra_unknowns[best]:.0f} unknowns, more than"
+    if extra_unknowns is not None and unknowns[best] > LARGEST_MEASURED:
+        warnings.warn(f"the chosen setting solves about {unknowns[best]:.0f} unknowns, more than"
                       f" the error model measured ({LARGEST_MEASURED}): its predicted time, {ms[best] / 1e3:.2g} s, is"
                       " extrapolated", AccuracyWarning, stacklevel=5)
-    if any(t.gap < (table.WALL_GAPS if t.model is WALL_MODEL else table.PAIR_GAPS)[0] for t in terms):
+    if any(t.gap < (table.PAIR_GAPS if t.model is PAIR_MODEL else table.WALL_GAPS)[0] for t in terms):
         warnings.warn(f"gaps ({gaps} radii) below the error model's smallest ({table.WALL_GAPS[0]} to the wall,"
                       f" {table.PAIR_GAPS[0]} between bodies): the error estimate is extrapolated",
                       AccuracyWarning, stacklevel=5)
     k, p, ratio = WALL_MODEL.settings[best]
-    wall_gap = min((t.gap for t in terms if t.model is WALL_MODEL), default=np.inf)
+    wall_gap = min((t.gap for t in terms if t.model is not PAIR_MODEL), default=np.inf)
     body_gap = min((t.gap for t in terms if t.model is PAIR_MODEL), default=np.inf)
     rebuilt_k = k if any(t.held_k is None for t in terms) else None
     return ChosenSettings(rebuilt_k, p, ratio, float(error), float(wall_gap), float(body_gap), float(ms[best]))
@@ -317,8 +345,8 @@ def fixed_body_excess(bodies, wall: bool, refine_fixed_at_wall: bool = True) -> 
     for body in fixed:
         gap = body.world_nodes()[:, 2].min() / body.mesh.equivalent_radius()
         held = None if rebuildable(body) else model_subdivisions(body.mesh)
-        term = _Term(WALL_MODEL, gap, held)
-        modelled = WALL_MODEL.at(gap)[2][_mapped(term)]
+        model = wall_model(body)
+        modelled = model.at(gap)[2][_mapped(_Term(model, gap, held))]
         for s, (k, p, ratio) in enumerate(WALL_MODEL.settings):
             if np.isfinite(modelled[s]):  # else not measured: the setting is left out anyway
                 mesh = body.mesh if held is not None or body.mesh.subdivisions == k else _mesh_at(body.mesh, k)
