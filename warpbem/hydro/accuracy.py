@@ -4,26 +4,27 @@ ratio) and the error estimate of the solve, read from the measured error model
 (``error_model_table.py``, measured by benchmarks/error_model.py against exact series).
 
 The model holds, per setting, a sphere's error and cost at a ladder of gaps: to the wall (the
-largest relative error of its mobility and its motion in shear; for a fixed sphere that of the
-force and torque holding it in shear, Goldman, Cox & Brenner 1967b, ``wall_model``) and to a second sphere (two
-spheres in unbounded fluid moving along their line of centres, together and towards each other:
-Stimson & Jeffery 1926, Maude 1961 / Brenner 1961). A scene is read at its closest gaps, each
-in units of the body's equivalent radius (two bodies: the mean of theirs), between bodies and
-the wall and between two bodies; between the measured gaps the error and the cost are
-interpolated linearly in log-log, beyond the farthest they are the farthest's (the unbounded
-sphere's error), below the nearest extrapolated along the last segment (with a warning). Bodies
-of other shapes are read as spheres of their equivalent radius (an assumption: the model is
-measured on spheres only), with one exception in the cost: a fixed body refined at the wall
-counts with its own refined mesh's unknowns (``fixed_body_excess``: an adherent cell's flat
-base is refined over far more of its surface than a sphere's pole), the time then scaled by the
-measured time of a solve of that size (``TIME_BY_UNKNOWNS``). The chosen k applies to the
-library meshes; a mesh that cannot be rebuilt (read from a file, deformed, or with a
-per-element surface velocity) keeps its own and is read at the measured k nearest its size. The
-estimate is the largest of the bodies' (a free body's motion, a fixed body's holding load),
-except that fixed bodies left unrefined at the wall (``refine_fixed_at_wall`` false, e.g. the
-adherent cells of the recruitment scenes) count as far from it: their holding loads are then
-outside the estimate, and so is that option's effect on the free cells (about 1 % in the
-recruitment scenes: ``SolverOptions.refine_fixed_at_wall``).
+largest relative error of a free sphere's mobility and its motion in shear; for a sphere held at
+rest, of the force and torque holding it in shear, Goldman, Cox & Brenner 1967b: ``wall_model``)
+and to a second sphere (two spheres in unbounded fluid moving along their line of centres,
+together and towards each other: Stimson & Jeffery 1926, Maude 1961 / Brenner 1961). A scene is
+read at its closest gaps, each in units of the body's equivalent radius (two bodies: the mean of
+theirs), between bodies and the wall and between two bodies; between the measured gaps the error
+and the cost are interpolated linearly in log-log, beyond the farthest they are the farthest's
+(the unbounded sphere's error), below the nearest extrapolated along the last segment (with a
+warning). Bodies of other shapes, and held bodies given a velocity, are read as free spheres of
+their equivalent radius (an assumption: the model is measured on spheres only; for an adherent
+dome the cautious one, ``wall_model``), with one exception in the cost: a fixed body refined at
+the wall counts with its own refined mesh's unknowns (``fixed_body_excess``: an adherent cell's
+flat base is refined over far more of its surface than a sphere's pole), the time then scaled by
+the measured time of a solve of that size (``TIME_BY_UNKNOWNS``). The chosen k applies to the
+library meshes; a mesh that cannot be rebuilt (read from a file, deformed, or with a per-element
+surface velocity) keeps its own and is read at the measured k nearest its size. The estimate is
+the largest of the bodies' (a free body's motion, a fixed body's holding load), except that
+fixed bodies left unrefined at the wall (``refine_fixed_at_wall`` false, e.g. the adherent cells
+of the recruitment scenes) count as far from it: their holding loads are then outside the
+estimate, and so is that option's effect on the free cells (about 1 % in the recruitment scenes:
+``SolverOptions.refine_fixed_at_wall``).
 
 Gaps are measured between mesh nodes (which lie on the surfaces): exact at a sphere's poles, at
 most the sag of an element above the true gap elsewhere.
