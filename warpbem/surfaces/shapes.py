@@ -53,9 +53,10 @@ def adherent_cell(shape: str, radius: float = 5e-6, gap: float = 0.25e-6, subdiv
         return sphere(radius, subdivisions), np.array([0.0, 0.0, radius + gap])
     a = brentq(lambda a: _mapped(unit, a, c, p_top, p_bottom).volume() - target, 0.2 * radius, 5 * radius,
                xtol=1e-15 * radius)
-    mapped = _mapped(unit, a, c, p_top, p_bottom).check()
-    return (Mesh(mapped.nodes, mapped.elements, unit.subdivisions, partial(adherent_mesh, shape, radius, gap)),
-            np.array([0.0, 0.0, height]))
+    mapped = _mapped(unit, a, c, p_top, p_bottom)
+    # checked as the mesh returned (with its recipe), so a Body of it does not check it again
+    mesh = Mesh(mapped.nodes, mapped.elements, unit.subdivisions, partial(adherent_mesh, shape, radius, gap)).check()
+    return mesh, np.array([0.0, 0.0, height])
 
 
 def adherent_mesh(shape: str, radius: float, gap: float, subdivisions: int) -> Mesh:
