@@ -132,3 +132,16 @@ def test_a_held_sphere_is_read_by_its_holding_load_and_other_held_shapes_by_a_fr
     # held but moved: its load is a drag, read with the free sphere's mobilities
     assert accuracy.wall_model(wb.Body(sphere, position=(0, 0, 3.0), fixed=True, velocity=(0, 0, 1.0))) is (
         accuracy.WALL_MODEL)
+
+
+def test_a_choice_larger_than_any_measured_solve_says_its_time_is_extrapolated():
+    """Beside a k = 4 dome 0.05 radius above the wall, refined at it, accuracy 1e-3 chooses a
+    setting whose counted unknowns (28 224 measured by benchmarks/accuracy_shapes.py) exceed the
+    error model's largest solve (accuracy.LARGEST_MEASURED): the target warns; at 3e-2 it does not."""
+    dome, position = adherent_cell("dome", radius=1.0, gap=0.05, subdivisions=4)
+    bodies = [wb.Body(dome, position=position, fixed=True), wb.Body(wb.mesh.sphere(1.0, 4), position=(2.8, 0, 1.6))]
+    with pytest.warns(accuracy.AccuracyWarning, match="extrapolated"):
+        accuracy.choose_for(bodies, True, 1e-3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", accuracy.AccuracyWarning)
+        accuracy.choose_for(bodies, True, 3e-2)
