@@ -28,8 +28,8 @@ import numpy as np
 
 import warpbem as wb
 from common import output, print_table, pyplot, write_csv
-from error_model import (exact_fixed, exact_mobility, exact_pair, fixed_bodies, measured_fixed, measured_mobility,
-                         measured_pair, pair_bodies, settings, solve_time, unknowns_of, MAX_UNKNOWNS)
+from error_model import (exact_fixed, exact_mobility, exact_pair, measured_fixed, measured_mobility, measured_pair,
+                         part_bodies, settings, solve_time, unknowns_of, MAX_UNKNOWNS)
 from warpbem.app.progress import Progress
 from warpbem.hydro import accuracy
 
@@ -65,8 +65,7 @@ def front(part: str, gap: float) -> list[dict]:
 def chosen_for(part: str, gap: float, target: float):
     """The target's choice for the case's bodies on the library mesh, as ``MobilitySolver`` makes
     it (its solve is then the front's solve of that setting: the same meshes, the same options)."""
-    bodies = {"wall": lambda: [wb.Body(LIBRARY_MESH, position=(0, 0, 1.0 + gap))],
-              "fixed": lambda: fixed_bodies(LIBRARY_MESH, gap), "pair": lambda: pair_bodies(LIBRARY_MESH, gap)}[part]()
+    bodies = part_bodies(part, LIBRARY_MESH, gap)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", wb.AccuracyWarning)
         chosen = accuracy.choose_for(bodies, part != "pair", target)

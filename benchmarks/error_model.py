@@ -77,18 +77,21 @@ def exact_fixed(h: float) -> dict:
     return {"F": 6 * np.pi * h * loads["f_star"], "T": 4 * np.pi * loads["t_star"]}
 
 
-def fixed_bodies(mesh, gap: float) -> list:
-    return [wb.Body(mesh, position=(0, 0, 1.0 + gap), fixed=True)]
-
-
 def measured_fixed(mesh, gap: float, options) -> tuple[dict, object]:
     """The fluid's force and torque on the held sphere: minus the load that holds it."""
-    solution = wb.solve_mobility(fixed_bodies(mesh, gap), shear_rate=1.0, viscosity=1.0, options=options)
+    solution = wb.solve_mobility(part_bodies("fixed", mesh, gap), shear_rate=1.0, viscosity=1.0, options=options)
     return {"F": -solution.force[0, 0], "T": -solution.torque[0, 1]}, solution
 
 
 def pair_bodies(mesh, gap: float) -> list:
     return [wb.Body(mesh, position=(-1.0 - gap / 2, 0, 0)), wb.Body(mesh, position=(1.0 + gap / 2, 0, 0))]
+
+
+def part_bodies(part: str, mesh, gap: float) -> list:
+    """The bodies of a part's scene: a sphere free or held at h/a = 1 + gap, or two spheres."""
+    if part == "pair":
+        return pair_bodies(mesh, gap)
+    return [wb.Body(mesh, position=(0, 0, 1.0 + gap), fixed=part == "fixed")]
 
 
 def measured_pair(mesh, gap: float, options) -> tuple[dict, object]:
@@ -114,14 +117,11 @@ def solve_time(part: str, mesh, gap: float, options) -> float:
     """Seconds of one solve from scratch (module docstring's protocol) of a ``part``'s scene."""
     def solve():
         t = time.perf_counter()
-        if part == "wall":
-            wb.solve_mobility([wb.Body(mesh, position=(0, 0, 1.0 + gap))], shear_rate=1.0, viscosity=1.0,
-                              options=options)
-        elif part == "fixed":
-            wb.solve_mobility(fixed_bodies(mesh, gap), shear_rate=1.0, viscosity=1.0, options=options)
-        else:
+        if part == "pair":
             wb.solve_mobility(pair_bodies(mesh, gap), viscosity=1.0, wall=False, forces=[[1, 0, 0], [-1, 0, 0]],
                               options=options)
+        else:
+            wb.solve_mobility(part_bodies(part, mesh, gap), shear_rate=1.0, viscosity=1.0, options=options)
         return time.perf_counter() - t
 
     first = solve()  # compiles and warms up
@@ -137,9 +137,8 @@ def unknowns_of(part: str, mesh, gap: float, options) -> int:
     from warpbem.hydro.geometry import SurfaceGeometry
 
     resolved = options.resolved()
-    bodies = [wb.Body(mesh, position=(0, 0, 1.0 + gap))] if part != "pair" else pair_bodies(mesh, gap)
-    geometry = SurfaceGeometry.from_bodies(bodies, resolved.quadrature_order, 1.0, part != "pair",
-                                           resolved.contact_refinement, True, resolved.density_order)
+    geometry = SurfaceGeometry.from_bodies(part_bodies(part, mesh, gap), resolved.quadrature_order, 1.0,
+                                           part != "pair", resolved.contact_refinement, True, resolved.density_order)
     return 3 * len(geometry.collocation)
 
 

@@ -134,13 +134,6 @@ class Hydrodynamics:
     chosen: object = None
 
 
-def is_spherical(mesh, rtol: float = 1e-9) -> bool:
-    """Whether every node lies on one sphere about the reference point (its mobility does not
-    depend on its orientation)."""
-    r = np.linalg.norm(mesh.nodes, axis=1)
-    return bool(r.max() - r.min() <= rtol * r.max())
-
-
 class HydrodynamicSolves:
     """The mobility solves of a model's states, exact or from snapshots (module docstring)."""
 
@@ -150,7 +143,7 @@ class HydrodynamicSolves:
         self.tolerance = model.solver.reuse_tolerance
         self.lateral = model.solver.reuse_lateral or 50.0 * self.tolerance
         self.interaction = model.solver.reuse_interaction or 10.0 * self.tolerance
-        self.spherical = [is_spherical(m) for m in model.meshes]
+        self.spherical = [m.is_spherical() for m in model.meshes]
         self.free = np.flatnonzero(~model.fixed_mask)
         # bodies sharing a mesh share their lone snapshots
         self.lone_of = [next(j for j, other in enumerate(model.meshes) if other is m) for m in model.meshes]

@@ -198,9 +198,7 @@ def scene_terms(bodies, wall: bool, refine_fixed_at_wall: bool = True) -> list[_
     return terms
 
 
-# mesh -> whether its nodes lie on one sphere (``wall_model``)
-_SPHERICAL: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
-SPHERE_TOLERANCE = 1e-3  # largest relative spread of the nodes' distances from their mean
+SPHERE_TOLERANCE = 1e-3  # a held body is read as a sphere where its nodes' distances spread less (``wall_model``)
 
 
 def wall_model(body) -> _Model:
@@ -216,15 +214,7 @@ def wall_model(body) -> _Model:
     at the wall")."""
     if not body.fixed or np.any(body.velocity) or np.any(body.angular_velocity):
         return WALL_MODEL
-    return FIXED_MODEL if spherical(body.mesh) else WALL_MODEL
-
-
-def spherical(mesh) -> bool:
-    """Whether the mesh's nodes lie on one sphere (within SPHERE_TOLERANCE), kept per mesh."""
-    if mesh not in _SPHERICAL:
-        distances = np.linalg.norm(mesh.nodes - mesh.nodes.mean(axis=0), axis=1)
-        _SPHERICAL[mesh] = bool(np.ptp(distances) <= SPHERE_TOLERANCE * distances.mean())
-    return _SPHERICAL[mesh]
+    return FIXED_MODEL if body.mesh.is_spherical(SPHERE_TOLERANCE) else WALL_MODEL
 
 
 def rebuildable(body) -> bool:
@@ -266,10 +256,10 @@ def scene_costs(terms: list[_Term], extra_unknowns: np.ndarray | None = None):
         unknowns += term.count * term_unknowns[index]
     if extra_unknowns is not None:
         orders = np.array([p for _, p, _ in settings])
+        total = unknowns + extra_unknowns
         with np.errstate(invalid="ignore"):  # settings not measured: inf - inf, left out below
-            ms = ms * np.exp(_log_time(np.maximum(unknowns + extra_unknowns, 1.0), orders)
-                             - _log_time(unknowns, orders))
-        ms, unknowns = np.nan_to_num(ms, nan=np.inf), unknowns + extra_unknowns
+            ms = ms * np.exp(_log_time(np.maximum(total, 1.0), orders) - _log_time(unknowns, orders))
+        ms, unknowns = np.nan_to_num(ms, nan=np.inf), total
     return np.array(errors), ms, unknowns
 
 
@@ -350,7 +340,8 @@ def fixed_body_excess(bodies, wall: bool, refine_fixed_at_wall: bool = True) -> 
     wall"). A free body moves, so it is read as a sphere as before, and a held sphere is what the
     model measured (its excess within 2 % of its unknowns, tests/unit/test_accuracy.py), so it is
     not counted: the count takes 1-30 ms per refined mesh, more than a coarse solve."""
-    fixed = [b for b in bodies if b.fixed and not spherical(b.mesh)] if wall and refine_fixed_at_wall else []
+    fixed = ([b for b in bodies if b.fixed and not b.mesh.is_spherical(SPHERE_TOLERANCE)]
+             if wall and refine_fixed_at_wall else [])
     return sum(body_excess(body) for body in fixed) if fixed else None
 
 

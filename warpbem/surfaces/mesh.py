@@ -64,6 +64,12 @@ class Mesh:
     def n_elements(self) -> int:
         return len(self.elements)
 
+    def is_spherical(self, rtol: float = 1e-9) -> bool:
+        """Whether every node lies on one sphere about the reference point, within ``rtol`` of
+        the largest node distance (its mobility then does not depend on its orientation)."""
+        r = np.linalg.norm(self.nodes, axis=1)
+        return bool(r.max() - r.min() <= rtol * r.max())
+
     def element_nodes(self) -> np.ndarray:
         """(E, 9, 3) node coordinates of every element."""
         return self.nodes[self.elements]
