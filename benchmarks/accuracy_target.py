@@ -1,5 +1,6 @@
 """The accuracy target checked (issue 27 item 1): ``SolverOptions(accuracy=...)`` at heights h/a =
-1.02 ... 3 above the wall (a free sphere; a held one, "fixed") and at gaps 0.04 ... 4 radii
+1.02 ... 3 above the wall (a free sphere, "wall"; its motion in shear alone, as a solve given no
+load reads it, "shear"; a held one, "fixed") and at gaps 0.04 ... 4 radii
 between two spheres (the error model's data lie between these: benchmarks/error_model.py),
 against the exact series.
 
@@ -29,46 +30,51 @@ import numpy as np
 import warpbem as wb
 from common import output, print_table, pyplot, write_csv
 from error_model import (exact_fixed, exact_mobility, exact_pair, measured_fixed, measured_mobility, measured_pair,
-                         part_bodies, settings, solve_time, unknowns_of, MAX_UNKNOWNS)
+                         part_bodies, settings, solve_time, table_errors, unknowns_of, MAX_UNKNOWNS, TABLE_PARTS)
 from warpbem.app.progress import Progress
 from warpbem.hydro import accuracy
 
-CASES = {"wall": (0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0),  # h/a - 1
+CASES = {"wall": (0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0),  # h/a - 1, a free sphere (and "shear")
          "fixed": (0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0),  # h/a - 1, a held sphere
          "pair": (0.04, 0.1, 0.2, 0.4, 1.0, 2.0, 4.0)}  # surface gap / a
 LIBRARY_MESH = wb.mesh.sphere(1.0, 4)  # what a user builds; the target rebuilds it at its k
 
 
-def true_error(part: str, gap: float, mesh, options) -> float:
-    """The largest relative error of the part's quantities (error_model.py)."""
+def true_errors(part: str, gap: float, mesh, options) -> dict:
+    """{table part: the largest relative error of its quantities} of a measured part
+    (error_model.py: "wall" gives "wall" and "shear")."""
     if part == "wall":
         exact, (values, _) = exact_mobility(1.0 + gap), measured_mobility(mesh, 1.0 + gap, options)
     elif part == "fixed":
         exact, (values, _) = exact_fixed(1.0 + gap), measured_fixed(mesh, gap, options)
     else:
         exact, (values, _) = exact_pair(gap), measured_pair(mesh, gap, options)
-    return max(abs(values[q] / exact[q] - 1) for q in values)
+    errors = {q: abs(values[q] / exact[q] - 1) for q in values}
+    return {name: max(errors[q] for q in quantities) for name, quantities in table_errors(part, errors).items()}
 
 
 def front(part: str, gap: float) -> list[dict]:
-    """Every setting of the error model at this case: true error and time."""
+    """Every setting of the error model at this case: true error (of each table part it gives) and
+    time."""
     rows = []
     for k, p, ratio in settings():
         mesh, options = wb.mesh.sphere(1.0, k), wb.SolverOptions(density_order=p, contact_refinement=ratio)
         if unknowns_of(part, mesh, gap, options) > MAX_UNKNOWNS:
             continue
-        rows.append({"part": part, "gap": gap, "k": k, "p": p, "ratio": ratio,
-                     "error": true_error(part, gap, mesh, options), "ms": 1e3 * solve_time(part, mesh, gap, options)})
+        errors, ms = true_errors(part, gap, mesh, options), 1e3 * solve_time(part, mesh, gap, options)
+        rows += [{"part": name, "gap": gap, "k": k, "p": p, "ratio": ratio, "error": error, "ms": ms}
+                 for name, error in errors.items()]
     return rows
 
 
 def chosen_for(part: str, gap: float, target: float):
     """The target's choice for the case's bodies on the library mesh, as ``MobilitySolver`` makes
-    it (its solve is then the front's solve of that setting: the same meshes, the same options)."""
+    it (its solve is then the front's solve of that setting: the same meshes, the same options;
+    "shear": a solve given no load)."""
     bodies = part_bodies(part, LIBRARY_MESH, gap)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", wb.AccuracyWarning)
-        chosen = accuracy.choose_for(bodies, part != "pair", target)
+        chosen = accuracy.choose_for(bodies, part != "pair", target, unloaded=part == "shear")
     return chosen, bool(caught)
 
 
@@ -80,6 +86,7 @@ def main():
     args = parser.parse_args()
     warnings.simplefilter("ignore", wb.ContactResolutionWarning)
     cases = [(part, gap) for part in args.parts for gap in CASES[part]]
+    checked = [(name, gap) for part, gap in cases for name in TABLE_PARTS[part]]
     if args.front:
         with open(args.front) as f:
             fronts = [{**r, "gap": float(r["gap"]), "k": int(r["k"]), "p": int(r["p"]), "ratio": float(r["ratio"]),
@@ -91,7 +98,7 @@ def main():
             progress.done(f"{part} gap {gap}")
         print(f"front: {write_csv('accuracy_front.csv', fronts)}")
     rows = []
-    for (part, gap), target in itertools.product(cases, args.accuracies):
+    for (part, gap), target in itertools.product(checked, args.accuracies):
         measured = {(r["k"], r["p"], r["ratio"]): r for r in fronts if r["part"] == part and r["gap"] == gap}
         chosen, warned = chosen_for(part, gap, target)
         solved = measured[chosen.subdivisions, chosen.density_order, chosen.contact_refinement]
@@ -120,7 +127,7 @@ def main():
 def chart(rows: list[dict]) -> None:
     plt = pyplot()
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4.2))
-    for part, marker in (("wall", "o"), ("fixed", "^"), ("pair", "s")):
+    for part, marker in (("wall", "o"), ("shear", "D"), ("fixed", "^"), ("pair", "s")):
         for target, colour in zip(sorted({r["accuracy"] for r in rows}, reverse=True), ("C0", "C1", "C2", "C3")):
             mine = [r for r in rows if r["part"] == part and r["accuracy"] == target]
             left.loglog([r["error"] for r in mine], [r["estimate"] for r in mine], marker, color=colour,

@@ -12,6 +12,8 @@ existing mesh, the set-up included; median of 3 after a warm-up; one timing abov
   the free sphere in shear, U and Omega (Goldman, Cox & Brenner 1967b); the parallel
   mobilities mu_xx^tt and mu_yy^rr (the inverse of O'Neill's 1964 and Dean & O'Neill's 1963
   resistance matrix); the normal mobility 1 / (6 pi lambda) (Brenner 1961);
+* shear: the same solves' U and Omega alone (the larger error), the error of a free body's motion
+  in the flow when no load is given (the solve measured for the time is that one);
 * fixed: a sphere held at gap h/a - 1 above the wall in shear; the larger relative error of
   the force and the torque that hold it (Goldman, Cox & Brenner 1967b: the fixed sphere's f*
   and t*), the error of a fixed body's holding load (an adherent cell's) where "wall" is a free
@@ -51,7 +53,9 @@ SUBDIVISIONS = (2, 3, 4, 6)
 # refinement ratios by density order: the bilinear density's unknowns grow 4 times faster under
 # refinement, and its ratio 3 takes 37 000 unknowns (131 s) at h/a = 1.015 on the k = 2 sphere
 RATIOS = {1: (0.0, 0.3, 1.1, 3.0), 2: (0.0, 0.3, 0.6, 1.1)}
-PARTS = ("wall", "fixed", "pair")
+PARTS = ("wall", "fixed", "pair")  # measured; "shear" comes with "wall"
+TABLE_PARTS = {"wall": ("wall", "shear"), "fixed": ("fixed",), "pair": ("pair",)}
+SHEAR_QUANTITIES = ("U", "Omega")
 MAX_UNKNOWNS = 16000  # settings larger than this at a gap are left out (tens of seconds a solve)
 TABLE = ROOT / "warpbem" / "hydro" / "error_model_table.py"
 
@@ -142,12 +146,17 @@ def unknowns_of(part: str, mesh, gap: float, options) -> int:
     return 3 * len(geometry.collocation)
 
 
+def table_errors(part: str, errors: dict) -> dict:
+    """{table part: the quantities of ``errors`` it bounds} for a measured ``part``."""
+    return {name: SHEAR_QUANTITIES if name == "shear" else tuple(errors) for name in TABLE_PARTS[part]}
+
+
 def kept_rows(parts) -> list[dict]:
     """The rows of ``parts`` as the table now holds them (a --write that measures other parts)."""
     from warpbem.hydro import error_model_table as table
 
     rows = []
-    for part in parts:
+    for part in (name for measured in parts for name in TABLE_PARTS[measured]):
         gaps = table.PAIR_GAPS if part == "pair" else table.WALL_GAPS
         for (k, p, ratio), cells in getattr(table, part.upper()).items():
             rows += [{"part": part, "k": k, "p": p, "ratio": ratio, "gap": g, "error": c[0], "unknowns": c[1],
@@ -161,11 +170,11 @@ def write_table(rows: list[dict], path: Path = TABLE) -> None:
              "benchmarks/error_model.py on the 2-core CPU, float64 (do not edit: run it with --write).",
              "",
              "WALL_GAPS: h/a - 1 of a sphere above the wall; PAIR_GAPS: the surface gap / a of two spheres;",
-             "WALL (a free sphere), FIXED (a held one), PAIR: (k, p, refinement ratio) -> per gap (relative",
-             "error, unknowns, milliseconds of one solve from scratch), None where not measured (over the",
-             "benchmark's unknowns limit).",
+             "WALL (a free sphere), SHEAR (its motion in shear alone), FIXED (a held one), PAIR: (k, p,",
+             "refinement ratio) -> per gap (relative error, unknowns, milliseconds of one solve from scratch),",
+             "None where not measured (over the benchmark's unknowns limit).",
              '"""', "", f"SUBDIVISIONS = {SUBDIVISIONS}", f"WALL_GAPS = {WALL_GAPS}", f"PAIR_GAPS = {PAIR_GAPS}"]
-    for part, gaps in (("wall", WALL_GAPS), ("fixed", WALL_GAPS), ("pair", PAIR_GAPS)):
+    for part, gaps in (("wall", WALL_GAPS), ("shear", WALL_GAPS), ("fixed", WALL_GAPS), ("pair", PAIR_GAPS)):
         lines.append(f"{part.upper()} = {{")
         for setting in settings():
             by_gap = {r["gap"]: r for r in rows if r["part"] == part and (r["k"], r["p"], r["ratio"]) == setting}
@@ -203,11 +212,12 @@ def main():
                    "pair": lambda: measured_pair(mesh, gap, options)}
         values, first = measure[part]()
         errors = {q: abs(values[q] / exact[part, gap][q] - 1) for q in values}
-        worst = max(errors, key=errors.get)
-        rows.append({"part": part, "k": k, "p": p, "ratio": ratio, "gap": gap,
-                     "unknowns": first.solution_vector.size,
-                     "error": errors[worst], "worst": worst, "ms": 1e3 * solve_time(part, mesh, gap, options)})
-        progress.done(f"{what}: {errors[worst]:.1e} ({worst}), {rows[-1]['ms']:.1f} ms")
+        ms = 1e3 * solve_time(part, mesh, gap, options)
+        for name, quantities in table_errors(part, errors).items():
+            worst = max(quantities, key=errors.get)
+            rows.append({"part": name, "k": k, "p": p, "ratio": ratio, "gap": gap,
+                         "unknowns": first.solution_vector.size, "error": errors[worst], "worst": worst, "ms": ms})
+        progress.done(f"{what}: {max(errors.values()):.1e} ({max(errors, key=errors.get)}), {ms:.1f} ms")
     print_table(rows, {"error": "{:.2e}", "ms": "{:.1f}"})
     print(f"table: {write_csv('error_model.csv', rows)}")
     if args.write:

@@ -9,6 +9,7 @@ import pytest
 
 import warpbem as wb
 from warpbem.hydro import accuracy
+from warpbem.hydro import error_model_table as table
 from warpbem.options import OptionError
 from warpbem.surfaces.shapes import adherent_cell
 
@@ -132,6 +133,32 @@ def test_a_held_sphere_is_read_by_its_holding_load_and_other_held_shapes_by_a_fr
     # held but moved: its load is a drag, read with the free sphere's mobilities
     assert accuracy.wall_model(wb.Body(sphere, position=(0, 0, 3.0), fixed=True, velocity=(0, 0, 1.0))) is (
         accuracy.WALL_MODEL)
+
+
+def test_a_solve_given_no_load_is_read_by_the_motion_in_shear_alone():
+    """accuracy.wall_model: a free body in a solve given no load is read in the table of its U
+    and Omega in shear (SHEAR_MODEL), two of the free sphere's five quantities, measured from the
+    same systems (benchmarks/error_model.py): at every setting and gap its error at most the
+    five's, its unknowns and time the same. MobilitySolver.solve reads a free sphere so when it
+    is given no load, and by the five when pushed; at h/a = 1.1 and 1e-2 the first is cheaper."""
+    for setting, cells in table.SHEAR.items():
+        for shear, wall in zip(cells, table.WALL[setting]):
+            assert (shear is None) == (wall is None)
+            assert shear is None or (shear[0] <= wall[0] and shear[1:] == wall[1:])
+    sphere = wb.Body(wb.mesh.sphere(1.0, 4), position=(0, 0, 1.1))
+    assert accuracy.wall_model(sphere, unloaded=True) is accuracy.SHEAR_MODEL
+    held = wb.Body(wb.mesh.sphere(1.0, 4), position=(0, 0, 1.1), fixed=True)
+    assert accuracy.wall_model(held, unloaded=True) is accuracy.FIXED_MODEL
+    solver = wb.MobilitySolver(1.0, 1.0, options=wb.SolverOptions(accuracy=1e-2))
+    free = solver.solve([sphere]).chosen
+    pushed = solver.solve([sphere], forces=[[0.0, 0.0, 1.0]]).chosen
+    assert free == accuracy.choose_for([sphere], True, 1e-2, unloaded=True)
+    assert pushed == accuracy.choose_for([sphere], True, 1e-2)
+    assert free.predicted_ms < pushed.predicted_ms
+    # a held body given a velocity drives the free one: the five quantities again
+    moved = wb.Body(wb.mesh.sphere(1.0, 4), position=(3.0, 0, 1.5), fixed=True, velocity=(1.0, 0, 0))
+    assert accuracy.choose_for([sphere, moved], True, 1e-2, unloaded=True) == accuracy.choose_for(
+        [sphere, moved], True, 1e-2)
 
 
 def test_a_choice_larger_than_any_measured_solve_says_its_time_is_extrapolated():

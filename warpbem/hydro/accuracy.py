@@ -4,8 +4,9 @@ ratio) and the error estimate of the solve, read from the measured error model
 (``error_model_table.py``, measured by benchmarks/error_model.py against exact series).
 
 The model holds, per setting, a sphere's error and cost at a ladder of gaps: to the wall (the
-largest relative error of a free sphere's mobility and its motion in shear; for a sphere held at
-rest, of the force and torque holding it in shear, Goldman, Cox & Brenner 1967b: ``wall_model``)
+largest relative error of a free sphere's mobility and its motion in shear; of its motion in
+shear alone, for a solve given no load; for a sphere held at rest, of the force and torque
+holding it in shear, Goldman, Cox & Brenner 1967b: ``wall_model``)
 and to a second sphere (two spheres in unbounded fluid moving along their line of centres,
 together and towards each other: Stimson & Jeffery 1926, Maude 1961 / Brenner 1961). A scene is
 read at its closest gaps, each in units of the body's equivalent radius (two bodies: the mean of
@@ -126,6 +127,7 @@ def refinement_threshold(k: int, ratio: float) -> float:
 # the wall's gap, and half the gap between two bodies for the bilinear density (hydro/geometry.py's
 # body_gap_share), is what the refinement resolves
 WALL_MODEL = _Model(table.WALL, table.WALL_GAPS, {1: 1.0, 2: 1.0})
+SHEAR_MODEL = _Model(table.SHEAR, table.WALL_GAPS, {1: 1.0, 2: 1.0})
 FIXED_MODEL = _Model(table.FIXED, table.WALL_GAPS, {1: 1.0, 2: 1.0})
 PAIR_MODEL = _Model(table.PAIR, table.PAIR_GAPS, {1: 1.0, 2: 0.5})
 
@@ -160,12 +162,13 @@ class _Term:
     count: int = 1
 
 
-def scene_terms(bodies, wall: bool, refine_fixed_at_wall: bool = True) -> list[_Term]:
+def scene_terms(bodies, wall: bool, refine_fixed_at_wall: bool = True, unloaded: bool = False) -> list[_Term]:
     """The terms of a scene: per group of bodies with the same held k and refinement, their
     smallest gap to the wall (the model's error never grows with the gap, so the smallest
     decides), and the smallest gap between two bodies within reach of each other, read with the
     coarser of their two meshes (module docstring). Fixed bodies not refined at the wall
-    (``refine_fixed_at_wall`` false) count as far from it, unrefined."""
+    (``refine_fixed_at_wall`` false) count as far from it, unrefined. ``unloaded``: the solve
+    gives no load and moves no held body (``wall_model``)."""
     radii = np.array([b.mesh.equivalent_radius() for b in bodies])
     nodes = [b.world_nodes() for b in bodies]
     held = [None if rebuildable(b) else model_subdivisions(b.mesh) for b in bodies]
@@ -177,7 +180,7 @@ def scene_terms(bodies, wall: bool, refine_fixed_at_wall: bool = True) -> list[_
         gap = nodes[b][:, 2].min() / radii[b] if wall and not unrefined else np.inf
         # without a wall a body alone is read as one of two spheres far apart (the pair table's
         # farthest gap), not as a sphere 4 radii above a wall
-        model = wall_model(body) if wall else PAIR_MODEL
+        model = wall_model(body, unloaded) if wall else PAIR_MODEL
         smallest, count = groups.get((model, held[b], unrefined), (np.inf, 0))
         groups[model, held[b], unrefined] = (min(smallest, gap), count + 1)
     terms = [_Term(model, gap, k, unrefined, count) for (model, k, unrefined), (gap, count) in groups.items()]
@@ -201,10 +204,14 @@ def scene_terms(bodies, wall: bool, refine_fixed_at_wall: bool = True) -> list[_
 SPHERE_TOLERANCE = 1e-3  # a held body is read as a sphere where its nodes' distances spread less (``wall_model``)
 
 
-def wall_model(body) -> _Model:
+def wall_model(body, unloaded: bool = False) -> _Model:
     """The table a body near the wall is read in: a sphere held at rest by the load that holds it
-    in shear (FIXED_MODEL); every other body by a free sphere's motion and mobilities
-    (WALL_MODEL). A held body given a velocity is read as the latter: its load is a drag, which
+    in shear (FIXED_MODEL); a free body in a solve that gives no load and moves no held body
+    (``unloaded``) by a free sphere's motion in shear, U and Omega (SHEAR_MODEL: its motion is
+    the flow's alone, the mobilities do not enter it; at h/a = 1.15 on k = 2, p = 2 the five
+    quantities' error, the normal or rotational mobility's, is 1.8-8.6 times U's and Omega's);
+    every other body by a free sphere's motion and mobilities (WALL_MODEL). A held body given
+    a velocity is read as the latter: its load is a drag, which
     near the wall is as gap-sensitive as a free sphere's mobility (read in the held table,
     Brenner's normal drag at h/a = 1.1 in the peer side by side went 16 -> 1.8 times the peer's
     accuracy at 0.1 s). A held body of another shape keeps the free sphere's table, the more
@@ -212,7 +219,9 @@ def wall_model(body) -> _Model:
     its holding force within 7.8e-2, 7.9e-3 and 6.7e-4 where it lay 0.82, 5.4e-2 and 6.4e-3 from
     the finest solve (its flat base in near contact; docs/benchmarks.md, "Adherent cells refined
     at the wall")."""
-    if not body.fixed or np.any(body.velocity) or np.any(body.angular_velocity):
+    if not body.fixed:
+        return SHEAR_MODEL if unloaded else WALL_MODEL
+    if np.any(body.velocity) or np.any(body.angular_velocity):
         return WALL_MODEL
     return FIXED_MODEL if body.mesh.is_spherical(SPHERE_TOLERANCE) else WALL_MODEL
 
@@ -304,13 +313,18 @@ def _log_time(unknowns: np.ndarray, orders: np.ndarray) -> np.ndarray:
 
 
 def choose_for(bodies, wall: bool, accuracy: float, density_order: int | None = None,
-               refine_fixed_at_wall: bool = True) -> ChosenSettings:
+               refine_fixed_at_wall: bool = True, unloaded: bool = False) -> ChosenSettings:
     """``choose`` for a scene (``scene_terms``, ``fixed_body_excess``); a per-element surface
-    velocity holds the density order at 1 (it is given per element, for the constant density)."""
+    velocity holds the density order at 1 (it is given per element, for the constant density).
+    ``unloaded``: the solve gives no force or torque (and no body has a velocity of its own, held
+    or on its surface: then it is not, ``wall_model``)."""
     if any(b.surface_velocity is not None for b in bodies):
         density_order = 1
+    unloaded = unloaded and not any(b.surface_velocity is not None or (b.fixed and (np.any(b.velocity)
+                                                                                   or np.any(b.angular_velocity)))
+                                    for b in bodies)
     excess = fixed_body_excess(bodies, wall, refine_fixed_at_wall)
-    return choose(accuracy, scene_terms(bodies, wall, refine_fixed_at_wall), density_order, excess)
+    return choose(accuracy, scene_terms(bodies, wall, refine_fixed_at_wall, unloaded), density_order, excess)
 
 
 # mesh -> {(place, orientation, ratio): its element count after the contact refinement at the wall}

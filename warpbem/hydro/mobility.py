@@ -142,12 +142,13 @@ class MobilitySolver:
         """The operator's mode as decided ("auto (not yet decided)" before the first solve)."""
         return self._active._mode or "auto (not yet decided)"
 
-    def _setting_for(self, bodies):
+    def _setting_for(self, bodies, unloaded: bool = False):
         """Under an accuracy target: (the solver of the setting chosen for ``bodies``, the bodies on
-        its meshes, the ChosenSettings)."""
+        its meshes, the ChosenSettings). ``unloaded``: a solve of the shear flow's motion alone
+        (``accuracy.wall_model``)."""
         options = self.options
         chosen = accuracy.choose_for(bodies, self.flow.wall, options.accuracy, options.density_order,
-                                     options.refine_fixed_at_wall)
+                                     options.refine_fixed_at_wall, unloaded)
         key = (chosen.subdivisions, chosen.density_order, chosen.contact_refinement)
         if key not in self._targeted:
             settings = dataclasses.replace(options, accuracy=None, density_order=chosen.density_order,
@@ -182,7 +183,8 @@ class MobilitySolver:
         if check_placement_first:
             check_placement(bodies, self.flow.wall)
         if self.options.accuracy is not None:
-            solver, bodies, chosen = self._setting_for(bodies)
+            unloaded = background and ambient_flow is None and not np.any(forces) and not np.any(torques)
+            solver, bodies, chosen = self._setting_for(bodies, unloaded)
             return dataclasses.replace(solver.solve(bodies, forces, torques, initial_guess, False, background,
                                                     ambient_flow, factor_every_body), chosen=chosen)
         system, key, previous, length = self._system(bodies)
