@@ -9,6 +9,10 @@ assembly inside GMRES where the matrix is built at its first product).
 
     python benchmarks/setup_cost.py [--heights 1.5 1.1]
 
+Then the same through the accuracy target at each of ACCURACIES (``SolverOptions(accuracy=...)``
+alone, the k = 4 library sphere given and rebuilt at the chosen k; the median of 15 solves): the
+settings it chose and its estimate.
+
 Targets of issue 27: h/a = 1.5 within 1e-3 in under 5 ms, h/a = 1.1 within 1e-2 in under 10 ms.
 """
 
@@ -31,6 +35,8 @@ from sphere_wall_series import free_sphere_in_shear  # noqa: E402
 
 # (mesh k, density order p, contact refinement ratio or None for p's default)
 SETTINGS = [(2, 1, 0.0), (3, 1, 0.0), (2, 2, 0.0), (2, 2, 0.3), (2, 2, None), (3, 2, None)]
+ACCURACIES = (1e-2, 1e-3)
+LIBRARY_SPHERE = wb.mesh.sphere(1.0, 4)
 # phase: (a file's name ending, a function name) whose cumulative time is the phase's
 PHASES = {"geometry": ("hydro/geometry.py", "from_bodies"),
           "refinement": ("surfaces/refinement.py", "refine_near_contact"),
@@ -60,32 +66,52 @@ def phase_shares(solve, repeats=20) -> dict:
     return shares
 
 
+def measured(h: float, mesh, options, repeats: int) -> dict:
+    """The row of one setting: its unknowns, the larger error of U and Omega against GCB 1967b,
+    the median time of ``repeats`` solves after a warm-up (and, under an accuracy target, what it
+    chose and its estimate)."""
+    exact = free_sphere_in_shear(h)
+    solve = solver(h, mesh, options)
+    solution = solve()  # compile and warm up
+    times = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        solution = solve()
+        times.append(time.perf_counter() - t)
+    u = solution.velocity[0, 0] / h
+    omega = solution.angular_velocity[0, 1]
+    chosen = solution.chosen
+    settings = options.resolved() if chosen is None else options
+    return {"h/a": h, "accuracy": "-" if chosen is None else f"{options.accuracy:g}",
+            "k": mesh.subdivisions if chosen is None else chosen.subdivisions,
+            "p": settings.density_order if chosen is None else chosen.density_order,
+            "refinement": ("default" if options.contact_refinement is None else options.contact_refinement)
+            if chosen is None else chosen.contact_refinement,
+            "unknowns": solution.solution_vector.size,
+            "estimate": np.nan if chosen is None else chosen.error_estimate,
+            "error": max(abs(u / exact["U_over_gdot_h"] - 1), abs(omega / exact["Omega_over_gdot"] - 1)),
+            "median_ms": 1e3 * np.median(times)}
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--heights", type=float, nargs="+", default=[1.5, 1.1])
     args = parser.parse_args()
     warnings.simplefilter("ignore", wb.ContactResolutionWarning)  # the settings without refinement, on purpose
-    rows, progress = [], Progress(len(args.heights) * len(SETTINGS))
+    rows, progress = [], Progress(len(args.heights) * (len(SETTINGS) + len(ACCURACIES)))
     for h in args.heights:
-        exact = free_sphere_in_shear(h)
         for k, p, ratio in SETTINGS:
-            options = wb.SolverOptions(density_order=p, contact_refinement=ratio)
-            solve = solver(h, wb.mesh.sphere(1.0, k), options)
-            solution = solve()  # compile and warm up
-            times = []
-            for _ in range(5):
-                t = time.perf_counter()
-                solution = solve()
-                times.append(time.perf_counter() - t)
-            u = solution.velocity[0, 0] / h
-            omega = solution.angular_velocity[0, 1]
-            error = max(abs(u / exact["U_over_gdot_h"] - 1), abs(omega / exact["Omega_over_gdot"] - 1))
-            row = {"h/a": h, "k": k, "p": p, "refinement": "default" if ratio is None else ratio,
-                   "unknowns": solution.solution_vector.size, "error": error, "median_ms": 1e3 * np.median(times)}
-            row.update({f"{phase}_%": 100 * share for phase, share in phase_shares(solve).items()})
+            mesh, options = wb.mesh.sphere(1.0, k), wb.SolverOptions(density_order=p, contact_refinement=ratio)
+            row = measured(h, mesh, options, 5)
+            row.update({f"{phase}_%": 100 * share for phase, share in phase_shares(solver(h, mesh, options)).items()})
             rows.append(row)
             progress.done(f"h/a = {h}, k = {k}, p = {p}, refinement {row['refinement']}: {row['median_ms']:.1f} ms")
-    print_table(rows, {"error": "{:.1e}", "median_ms": "{:.1f}", **{f"{p}_%": "{:.0f}" for p in PHASES}})
+        for accuracy in ACCURACIES:
+            rows.append(measured(h, LIBRARY_SPHERE, wb.SolverOptions(accuracy=accuracy), 15)
+                        | {f"{phase}_%": np.nan for phase in PHASES})
+            progress.done(f"h/a = {h}, accuracy {accuracy:g}: {rows[-1]['median_ms']:.1f} ms")
+    print_table(rows, {"estimate": "{:.1e}", "error": "{:.1e}", "median_ms": "{:.1f}",
+                       **{f"{p}_%": "{:.0f}" for p in PHASES}})
     print(f"table: {write_csv('setup_cost.csv', rows)}")
 
 
