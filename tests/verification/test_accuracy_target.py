@@ -9,7 +9,7 @@ resistance matrix) and the normal one (Brenner 1961); U and Omega alone for a so
 ("shear"); a held sphere's force and torque in shear
 (GCB 1967b); two spheres pushed together (Stimson &
 Jeffery 1926) and towards each other (Maude 1961). The true error is the largest relative error
-of these. Measured over 63 cases (benchmarks/accuracy_target.py, docs/benchmarks.md) the
+of these. Measured over 84 cases (benchmarks/accuracy_target.py, docs/benchmarks.md) the
 estimate was at least 0.41 of the true error and at most 6.7 times it (at h/a = 1.02, 1e-2).
 """
 
