@@ -29,8 +29,8 @@ import numpy as np
 
 import warpbem as wb
 from common import output, print_table, pyplot, write_csv
-from error_model import (exact_fixed, exact_mobility, exact_pair, measured_fixed, measured_mobility, measured_pair,
-                         part_bodies, settings, solve_time, table_errors, unknowns_of, MAX_UNKNOWNS, TABLE_PARTS)
+from error_model import (part_bodies, part_errors, settings, solve_time, table_errors, unknowns_of, MAX_UNKNOWNS,
+                         TABLE_PARTS)
 from warpbem.app.progress import Progress
 from warpbem.hydro import accuracy
 
@@ -43,13 +43,7 @@ LIBRARY_MESH = wb.mesh.sphere(1.0, 4)  # what a user builds; the target rebuilds
 def true_errors(part: str, gap: float, mesh, options) -> dict:
     """{table part: the largest relative error of its quantities} of a measured part
     (error_model.py: "wall" gives "wall" and "shear")."""
-    if part == "wall":
-        exact, (values, _) = exact_mobility(1.0 + gap), measured_mobility(mesh, 1.0 + gap, options)
-    elif part == "fixed":
-        exact, (values, _) = exact_fixed(1.0 + gap), measured_fixed(mesh, gap, options)
-    else:
-        exact, (values, _) = exact_pair(gap), measured_pair(mesh, gap, options)
-    errors = {q: abs(values[q] / exact[q] - 1) for q in values}
+    errors, _ = part_errors(part, mesh, gap, options)
     return {name: max(errors[q] for q in quantities) for name, quantities in table_errors(part, errors).items()}
 
 

@@ -146,6 +146,18 @@ def unknowns_of(part: str, mesh, gap: float, options) -> int:
     return 3 * len(geometry.collocation)
 
 
+def part_errors(part: str, mesh, gap: float, options) -> tuple[dict, object]:
+    """({quantity: its relative error against the exact series}, the first solution) of a
+    measured part's scene at ``gap`` (module docstring)."""
+    if part == "wall":
+        exact, (values, first) = exact_mobility(1.0 + gap), measured_mobility(mesh, 1.0 + gap, options)
+    elif part == "fixed":
+        exact, (values, first) = exact_fixed(1.0 + gap), measured_fixed(mesh, gap, options)
+    else:
+        exact, (values, first) = exact_pair(gap), measured_pair(mesh, gap, options)
+    return {q: abs(values[q] / exact[q] - 1) for q in values}, first
+
+
 def table_errors(part: str, errors: dict) -> dict:
     """{table part: the quantities of ``errors`` it bounds} for a measured ``part``."""
     return {name: SHEAR_QUANTITIES if name == "shear" else tuple(errors) for name in TABLE_PARTS[part]}
@@ -194,9 +206,6 @@ def main():
                         help="the parts to measure; with --write the others are kept from the table as it is")
     args = parser.parse_args()
     warnings.simplefilter("ignore", wb.ContactResolutionWarning)  # the settings without refinement, on purpose
-    exact = ({("wall", g): exact_mobility(1.0 + g) for g in WALL_GAPS}
-             | {("fixed", g): exact_fixed(1.0 + g) for g in WALL_GAPS}
-             | {("pair", g): exact_pair(g) for g in PAIR_GAPS})
     cases = [(part, s, g) for part in args.parts for s in settings()
              for g in (PAIR_GAPS if part == "pair" else WALL_GAPS)]
     rows, progress = [], Progress(len(cases))
@@ -207,11 +216,7 @@ def main():
         if unknowns_of(part, mesh, gap, options) > MAX_UNKNOWNS:
             progress.done(f"{what}: over {MAX_UNKNOWNS} unknowns, left out")
             continue
-        measure = {"wall": lambda: measured_mobility(mesh, 1.0 + gap, options),
-                   "fixed": lambda: measured_fixed(mesh, gap, options),
-                   "pair": lambda: measured_pair(mesh, gap, options)}
-        values, first = measure[part]()
-        errors = {q: abs(values[q] / exact[part, gap][q] - 1) for q in values}
+        errors, first = part_errors(part, mesh, gap, options)
         ms = 1e3 * solve_time(part, mesh, gap, options)
         for name, quantities in table_errors(part, errors).items():
             worst = max(quantities, key=errors.get)

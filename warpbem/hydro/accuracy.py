@@ -221,9 +221,14 @@ def wall_model(body, unloaded: bool = False) -> _Model:
     at the wall")."""
     if not body.fixed:
         return SHEAR_MODEL if unloaded else WALL_MODEL
-    if np.any(body.velocity) or np.any(body.angular_velocity):
+    if _held_and_moved(body):
         return WALL_MODEL
     return FIXED_MODEL if body.mesh.is_spherical(SPHERE_TOLERANCE) else WALL_MODEL
+
+
+def _held_and_moved(body) -> bool:
+    """A held body given a velocity or an angular velocity (its load is then a drag)."""
+    return body.fixed and bool(np.any(body.velocity) or np.any(body.angular_velocity))
 
 
 def rebuildable(body) -> bool:
@@ -320,9 +325,7 @@ def choose_for(bodies, wall: bool, accuracy: float, density_order: int | None = 
     or on its surface: then it is not, ``wall_model``)."""
     if any(b.surface_velocity is not None for b in bodies):
         density_order = 1
-    unloaded = unloaded and not any(b.surface_velocity is not None or (b.fixed and (np.any(b.velocity)
-                                                                                   or np.any(b.angular_velocity)))
-                                    for b in bodies)
+    unloaded = unloaded and not any(b.surface_velocity is not None or _held_and_moved(b) for b in bodies)
     excess = fixed_body_excess(bodies, wall, refine_fixed_at_wall)
     return choose(accuracy, scene_terms(bodies, wall, refine_fixed_at_wall, unloaded), density_order, excess)
 
