@@ -27,10 +27,11 @@ The gaps lie between those the target is checked at (h/a 1.02 ... 3 at the wall,
 the model's interpolation, not its own data points.
 
     python benchmarks/error_model.py            # results/bench/error_model.csv
-    python benchmarks/error_model.py --write    # and warpbem/hydro/error_model_table.py
+    python benchmarks/error_model.py --write    # and warpbem/hydro/error_model_table.json
 """
 
 import argparse
+import json
 import statistics
 import sys
 import time
@@ -57,7 +58,11 @@ PARTS = ("wall", "fixed", "pair")  # measured; "shear" comes with "wall"
 TABLE_PARTS = {"wall": ("wall", "shear"), "fixed": ("fixed",), "pair": ("pair",)}
 SHEAR_QUANTITIES = ("U", "Omega")
 MAX_UNKNOWNS = 16000  # settings larger than this at a gap are left out (tens of seconds a solve)
-TABLE = ROOT / "warpbem" / "hydro" / "error_model_table.py"
+TABLE = ROOT / "warpbem" / "hydro" / "error_model_table.json"
+TABLE_NAMES = ("wall", "shear", "fixed", "pair")  # the tables of the data file, in its order
+ABOUT = ("The error model of the accuracy target (warpbem/hydro/accuracy.py), measured by benchmarks/error_model.py on"
+         " the 2-core CPU, float64; do not edit: run it with --write. The fields: warpbem/hydro/error_model_table.py")
+CELL = ("relative error", "unknowns", "milliseconds of one solve from scratch")  # a measured cell's fields
 
 
 def exact_mobility(h: float) -> dict:
@@ -177,26 +182,36 @@ def kept_rows(parts) -> list[dict]:
 
 
 def write_table(rows: list[dict], path: Path = TABLE) -> None:
-    """The rows as the Python module the accuracy target reads (no data file to package)."""
-    lines = ['"""The error model of the accuracy target (``accuracy.py``), measured by',
-             "benchmarks/error_model.py on the 2-core CPU, float64 (do not edit: run it with --write).",
-             "",
-             "WALL_GAPS: h/a - 1 of a sphere above the wall; PAIR_GAPS: the surface gap / a of two spheres;",
-             "WALL (a free sphere), SHEAR (its motion in shear alone), FIXED (a held one), PAIR: (k, p,",
-             "refinement ratio) -> per gap (relative error, unknowns, milliseconds of one solve from scratch),",
-             "None where not measured (over the benchmark's unknowns limit).",
-             '"""', "", f"SUBDIVISIONS = {SUBDIVISIONS}", f"WALL_GAPS = {WALL_GAPS}", f"PAIR_GAPS = {PAIR_GAPS}"]
-    for part, gaps in (("wall", WALL_GAPS), ("shear", WALL_GAPS), ("fixed", WALL_GAPS), ("pair", PAIR_GAPS)):
-        lines.append(f"{part.upper()} = {{")
+    """The rows as the data file the accuracy target reads (``table_text``), each cell's error
+    and time to 3 digits."""
+    tables = {}
+    for part in TABLE_NAMES:
+        gaps, table = PAIR_GAPS if part == "pair" else WALL_GAPS, {}
         for setting in settings():
             by_gap = {r["gap"]: r for r in rows if r["part"] == part and (r["k"], r["p"], r["ratio"]) == setting}
-            cells = [None if g not in by_gap else (float(f"{by_gap[g]['error']:.3g}"), by_gap[g]["unknowns"],
-                                                    float(f"{by_gap[g]['ms']:.3g}")) for g in gaps]
-            lines.append(f"    {setting}: (")
-            lines += [f"        {c}," for c in cells]
-            lines.append("    ),")
-        lines.append("}")
-    path.write_text("\n".join(lines) + "\n")
+            table[setting] = tuple(None if g not in by_gap else (float(f"{by_gap[g]['error']:.3g}"),
+                                                                by_gap[g]["unknowns"], float(f"{by_gap[g]['ms']:.3g}"))
+                                   for g in gaps)
+        tables[part.upper()] = table
+    path.write_text(table_text(tables))
+
+
+def table_text(tables: dict) -> str:
+    """The data file (JSON) of ``tables`` ({"WALL", "SHEAR", "FIXED", "PAIR": {(k, p, ratio): a cell
+    per gap}}), loaded by ``warpbem/hydro/error_model_table.py`` (its docstring: the fields): one
+    cell a line, so that a new measurement shows in a diff cell by cell; numbers in Python's
+    shortest repr, read back to the same float."""
+    def setting_text(setting: tuple, cells: tuple) -> str:
+        k, p, ratio = setting
+        return (f'    {{"k": {k}, "p": {p}, "ratio": {json.dumps(ratio)}, "cells": [\n'
+                + ",\n".join(f"      {json.dumps(c)}" for c in cells) + "\n    ]}")
+
+    fields = [f'"about": {json.dumps(ABOUT)}', f'"cell": {json.dumps(CELL)}',
+              f'"SUBDIVISIONS": {json.dumps(SUBDIVISIONS)}', f'"WALL_GAPS": {json.dumps(WALL_GAPS)}',
+              f'"PAIR_GAPS": {json.dumps(PAIR_GAPS)}']
+    fields += [f'"{name.upper()}": [\n' + ",\n".join(setting_text(*item) for item in tables[name.upper()].items())
+               + "\n  ]" for name in TABLE_NAMES]
+    return "{\n  " + ",\n  ".join(fields) + "\n}\n"
 
 
 def main():
