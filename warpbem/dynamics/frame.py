@@ -47,6 +47,9 @@ def frame_columns(model) -> dict[str, Column]:
         "gmres_iterations": Column("1", (), "GMRES iterations of all solves at this state"),
         "gmres_residual": Column("1", (), "largest relative residual of the solves at this state"),
         "closest_gap": Column("m", (), "exact smallest surface gap of a free body to another body or the wall"),
+        "closest_body_gap": Column("m", (), "exact smallest surface gap of a free body to another body (inf: no"
+                                   " other body)"),
+        "wall_gap": Column("m", (), "exact smallest surface gap of a free body to the wall (inf: no wall)"),
     }
     if model.solver.accuracy is not None:  # what the accuracy target chose (hydro/accuracy.py)
         columns.update({name: Column("1", (), f"{what} of the last mobility solve at or before this state, as the"
@@ -78,6 +81,8 @@ class Frame:
     gmres_iterations: int
     gmres_residual: float
     closest_gap: float
+    closest_body_gap: float
+    wall_gap: float
     loads: dict
     parts: dict
     derived: dict
@@ -87,7 +92,8 @@ class Frame:
                "orientation": self.orientations, "velocity": self.velocity,
                "angular_velocity": self.angular_velocity, "force": self.force, "torque": self.torque,
                "gmres_iterations": self.gmres_iterations, "gmres_residual": self.gmres_residual,
-               "closest_gap": self.closest_gap}
+               "closest_gap": self.closest_gap, "closest_body_gap": self.closest_body_gap,
+               "wall_gap": self.wall_gap}
         for name, loads in self.loads.items():
             row[f"{name}_force"], row[f"{name}_torque"] = loads.force, loads.torque
         for name, part in self.parts.items():

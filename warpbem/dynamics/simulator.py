@@ -120,8 +120,10 @@ class Evaluation:
         chosen = self.hydro.chosen
         if chosen is not None:
             derived.update({name: getattr(chosen, name.removeprefix("accuracy_")) or 0 for name in ACCURACY_COLUMNS})
+        # the two kinds of gap from the state's kept gaps (min of them: closest_gap, bit for bit)
+        body_gap, wall_gap = self.contacts.closest("bodies"), self.contacts.closest("wall")
         return Frame(s.time, dt, s.steps, s.positions, s.orientations, velocity, angular_velocity, force, torque,
-                     iterations, residual, self.contacts.closest(), loads, s.parts, derived)
+                     iterations, residual, min(body_gap, wall_gap), body_gap, wall_gap, loads, s.parts, derived)
 
 
 class Simulator:

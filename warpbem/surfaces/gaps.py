@@ -183,11 +183,16 @@ class Contacts:
         gaps = [g.distance for g in self.within(distance)]
         return float(np.clip(min(gaps, default=distance), 0.0, distance))
 
-    def closest(self) -> float:
+    def closest(self, among: str = "all") -> float:
         """The exact smallest gap (m) of a free body to another body or the wall (inf if there is
-        none). Pairs are searched in order of their bounding-sphere gap, a lower bound of the
-        exact one, and the search stops once that bound passes the best gap found."""
-        pairs = self.pairs(np.inf)
+        none); ``among``: "all" pairs, "bodies" (another body only) or "wall" (the wall only).
+        The wall gaps are searched together; pairs of bodies in order of their bounding-sphere
+        gap, a lower bound of the exact one, until that bound passes the best gap found."""
+        if among not in ("all", "bodies", "wall"):
+            raise ValueError(f"closest: among = {among!r}, not 'all', 'bodies' or 'wall'")
+        pairs = [p for p in self.pairs(np.inf) if among == "all" or (p[1] == WALL) == (among == "wall")]
+        if among == "wall":  # every free body's, in one launch (GapFinder.to_wall)
+            return float(min((g.distance for g in self.to_wall([i for i, _ in pairs])), default=np.inf))
         bounds = [self.positions[i][2] - self.outer_radii[i] if j == WALL else
                   np.linalg.norm(self.positions[i] - self.positions[j]) - self.outer_radii[i] - self.outer_radii[j]
                   for i, j in pairs]
