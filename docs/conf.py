@@ -6,15 +6,16 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "docs" / "_ext"))  # options_table: the options' tables in the API reference
 
 project = "warpbem"
 author = "the warpbem developers"
 copyright = "2026, the warpbem developers"
-extensions = ["myst_parser", "sphinx.ext.autodoc", "sphinx.ext.napoleon"]
+extensions = ["myst_parser", "sphinx.ext.autodoc", "sphinx.ext.napoleon", "options_table"]
 source_suffix = {".md": "markdown"}
 root_doc = "index"
 # figures/ holds charts and their data (and one working note) that the pages show, not pages
-exclude_patterns = ["_build", "figures/*.md", "figures/**"]
+exclude_patterns = ["_build", "_ext", "figures/*.md", "figures/**"]
 myst_heading_anchors = 3
 autodoc_member_order = "bysource"
 autodoc_typehints = "description"

@@ -130,11 +130,18 @@ def from_table(cls, table: dict, where: str, required=(), **given):
         raise OptionError(f"{where}.{err}") from err
 
 
-def reference_rows(cls, section: str) -> list[str]:
-    """Markdown table rows ``| key | unit | default | allowed | meaning |`` of ``cls``'s options."""
-    rows = []
+def reference_cells(cls) -> list[tuple[str, str, str, str, str]]:
+    """(name, unit, default, allowed, meaning) of each of ``cls``'s options, as text; a default
+    of ``-`` is resolved from the context (its meaning says how), allowed ``-``: any value."""
+    cells = []
     for name, default, spec in declared(cls):
         shown = "-" if default is None else (str(default).lower() if isinstance(default, bool) else
                                              repr(list(default)) if isinstance(default, tuple) else repr(default))
-        rows.append(f"| `{section}.{name}` | {spec.unit} | {shown} | {spec.range_text() or '-'} | {spec.doc} |")
-    return rows
+        cells.append((name, spec.unit, shown, spec.range_text() or "-", spec.doc))
+    return cells
+
+
+def reference_rows(cls, section: str) -> list[str]:
+    """Markdown table rows ``| key | unit | default | allowed | meaning |`` of ``cls``'s options."""
+    return [f"| `{section}.{name}` | {unit} | {shown} | {allowed} | {doc} |"
+            for name, unit, shown, allowed, doc in reference_cells(cls)]

@@ -52,6 +52,7 @@ import numpy as np
 
 from .. import runtime
 from ..kernels import integrals
+from ..options import option, validate
 
 NEAR_FIELD_MODES = ("auto", "stored", "recomputed")
 STRENGTHS = 12  # per source: 9 double-layer components (density (x) area vector), 3 of a point force
@@ -79,17 +80,16 @@ class TreecodeOptions:
     memory O(N) with a small constant), or "auto": stored while they take at most
     ``near_memory_fraction`` of the device's memory."""
 
-    tolerance: float = 1e-6
-    near_field: str = "auto"
-    near_memory_fraction: float = 0.25
+    tolerance: float = option(1e-6, "relative error of a far-field product aimed at (the Chebyshev points per"
+                              " direction in each box follow from it)", low=1e-12, high=0.1)
+    near_field: str = option("auto", "near-field blocks: stored (assembled once, applied with BLAS), recomputed"
+                             " (in every product, memory O(N)) or auto (stored while they fit"
+                             " near_memory_fraction of the device's memory)", choices=NEAR_FIELD_MODES)
+    near_memory_fraction: float = option(0.25, "with near_field = 'auto', the share of the device's memory the"
+                                         " stored near field may take", low=0.0, high=1.0)
 
     def __post_init__(self):
-        if self.near_field not in NEAR_FIELD_MODES:
-            raise ValueError(f"near_field must be one of {NEAR_FIELD_MODES}, got {self.near_field!r}")
-        if not 0 <= self.near_memory_fraction <= 1:
-            raise ValueError(f"near_memory_fraction must be in [0, 1], got {self.near_memory_fraction!r}")
-        if not np.isfinite(self.tolerance) or not 1e-12 <= self.tolerance <= 0.1:
-            raise ValueError(f"treecode tolerance must be in [1e-12, 0.1], got {self.tolerance!r}")
+        validate(self)
 
 
 def chebyshev_points(p: int) -> np.ndarray:
