@@ -45,3 +45,17 @@ def test_bad_files_end_in_one_line_naming_them(files, capsys, argv, named, probl
     assert cli.main(argv) == 2
     line = one_line(capsys)
     assert line.startswith(f"warpbem {argv[0]}: ") and named in line and problem in line
+
+
+@pytest.mark.parametrize("argv", [
+    ["run", "scenes/settling_cell.toml", "--output", "{d}/out.h5", "--device", "cuda:99"],
+    ["sweep", "scenes/settling_cell.toml", "--vary", "flow.viscosity=1e-3,2e-3", "--output-dir", "{d}/sweep",
+     "--device", "cuda:99"],
+    ["demo", "--positions", "1", "--output", "{d}/demo.h5", "--device", "cuda:99"],
+])
+def test_an_absent_device_ends_in_one_line_naming_the_devices_there_are(tmp_path, capsys, argv):
+    argv = [a.format(d=tmp_path) for a in argv]
+    assert cli.main(argv) == 2
+    line = one_line(capsys)
+    assert line.startswith(f"warpbem {argv[0]}: device 'cuda:99' is not available; this machine has: cpu")
+    assert not any(tmp_path.iterdir())  # refused before any work: nothing written

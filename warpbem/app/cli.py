@@ -2,9 +2,10 @@
 files, ``warpbem plot`` charts a result, ``warpbem xdmf`` writes a run's moving meshes for ParaView,
 ``warpbem animate`` a GIF of a run.
 
-A file that is missing, unreadable or not what the command needs, and a scene that does not
-validate, end the command with one line on stderr naming the file or field (exit status 2);
-a sweep point that fails, with one line naming the point (exit status 1)."""
+A file that is missing, unreadable or not what the command needs, a scene that does not
+validate and a --device this machine does not have end the command with one line on stderr
+naming the file, field or device (exit status 2); a sweep point that fails, with one line naming
+the point (exit status 1)."""
 
 from __future__ import annotations
 
@@ -133,19 +134,30 @@ def _animate(args, parser):
     return 0
 
 
+def _check_device(args) -> None:
+    """The --device of a command that takes one, before any work: DeviceError naming the devices
+    there are. A sweep on a Dask cluster runs on the workers' devices, not this machine's."""
+    if getattr(args, "device", None) is not None and getattr(args, "scheduler", None) is None:
+        from .. import runtime
+
+        runtime.resolve_device(args.device)
+
+
 VERBS = {"demo": _demo, "run": _run, "sweep": _sweep, "plot": _plot, "xdmf": _xdmf, "animate": _animate}
 
 
 def main(argv=None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
+    from ..runtime import DeviceError
     from .io import RunFileError
     from .scene import SceneError
     from .sweep import SweepError
 
     try:
+        _check_device(args)
         return VERBS[args.command](args, parser)
-    except (SceneError, RunFileError) as err:
+    except (SceneError, RunFileError, DeviceError) as err:
         print(f"warpbem {args.command}: {err}", file=sys.stderr)
         return 2
     except SweepError as err:
