@@ -1,8 +1,9 @@
 """``warpbem animate RUN.h5 --output RUN.gif``: a run as an animated GIF, written by matplotlib's
 Pillow writer (Pillow comes with matplotlib; no ffmpeg). Side (X-Z) and top (X-Y) views with
 every body drawn to scale as the outline of its mesh's nodes (deformable cells as they deform,
-from the frames' node displacements), the wall, the ligand ends of an adhesive run's bonds and
-the time of each frame. Axes are fixed over the run, so motion reads as motion."""
+from the frames' node displacements), farther bodies under nearer ones (``plotting.VIEWS``),
+the wall, the ligand ends of an adhesive run's bonds and the time of each frame. Axes are
+fixed over the run, so motion reads as motion."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .io import open_result
-from .plotting import _pyplot, outline
+from .plotting import VIEWS, _pyplot, depth_order, outline
 from .xdmf import read_frames, world_nodes
 
 UM = 1e6
@@ -55,17 +56,21 @@ def animate(run_path, gif_path=None, most: int = MAX_FRAMES, fps: float = 10.0, 
 
     def draw(j):
         shape = None if displacement is None else displacement[j]
-        for ax, axis, title in ((side, 2, "side view (X-Z)"), (top, 1, "top view (X-Y)")):
+        for ax, view, title in ((side, "side", "side view (X-Z), seen from -Y: farther drawn behind"),
+                                (top, "top", "top view (X-Y), seen from above: lower drawn behind")):
             ax.clear()
-            for i in range(len(meshes)):
+            (_, axis), depth_axis, farther = VIEWS[view]
+            for rank, i in enumerate(depth_order(pos[j, :, depth_axis], farther)):
                 nodes = world_nodes(meshes[i:i + 1], pos[j, i:i + 1], orientations[j, i:i + 1],
                                     None if shape is None else shape[i:i + 1]) * UM
                 line = outline(nodes[:, [0, axis]])
                 colour = colours[i % len(colours)]
-                ax.fill(line[:, 0], line[:, 1], color=colour, alpha=0.25)
-                ax.plot(line[:, 0], line[:, 1], color=colour, lw=1.2, label=names[i] if len(names) <= 8 else None)
+                # translucent fills: a cell behind another shows through it
+                ax.fill(line[:, 0], line[:, 1], color=colour, alpha=0.25, zorder=1.0 + rank)
+                ax.plot(line[:, 0], line[:, 1], color=colour, lw=1.2, zorder=1.5 + rank,
+                        label=names[i] if len(names) <= 8 else None)
             if bonds is not None and len(bonds[j]):
-                ax.plot(bonds[j][:, 0] * UM, bonds[j][:, axis] * UM, ".", color="k", ms=2,
+                ax.plot(bonds[j][:, 0] * UM, bonds[j][:, axis] * UM, ".", color="k", ms=2, zorder=len(meshes) + 2,
                         label=f"{len(bonds[j])} bonds' ligand ends")
             ax.set(xlim=(low[0], high[0]), ylim=(0.0 if axis == 2 else low[1], high[axis]),
                    xlabel="X [um]", ylabel=("Z" if axis == 2 else "Y") + " [um]", title=title)
