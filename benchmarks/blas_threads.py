@@ -23,7 +23,7 @@ from threadpoolctl import ThreadpoolController
 import warpbem as wb
 from common import print_table, pyplot, save_chart, write_csv, output
 from warpbem.hydro.geometry import SurfaceGeometry
-from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions
+from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions, discrete_form
 from warpbem.app.progress import Progress
 from warpbem.kernels import launch
 
@@ -32,7 +32,7 @@ def product_then_apply():
     sphere = wb.mesh.sphere(1.0, 3)
     geometry = SurfaceGeometry.from_bodies([wb.Body(sphere, position=(3.0 * i, 0.0, 1.5)) for i in range(6)],
                                            QuadratureOptions().order, 1.0, True)
-    op = BoundaryOperator(geometry, True).discrete("matrix_free")
+    op = discrete_form(BoundaryOperator(geometry, True), "matrix_free")
     q = np.random.default_rng(0).standard_normal(3 * geometry.n_elements)
     a = np.random.default_rng(1).standard_normal((400, 400))
 

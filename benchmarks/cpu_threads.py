@@ -20,7 +20,7 @@ from warpbem import Body, mesh
 from warpbem.app.progress import Progress
 from warpbem.kernels import launch
 from warpbem.hydro.geometry import SurfaceGeometry
-from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions
+from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions, discrete_form
 
 
 def cases(subdivisions):
@@ -52,12 +52,12 @@ def main():
             launch.CHUNKS_PER_THREAD = per_thread
 
             def assemble():
-                BoundaryOperator(geometry, True).discrete("dense").matrix()
+                discrete_form(BoundaryOperator(geometry, True), "dense").matrix()
 
             def self_blocks():  # the matrix-free set-up: row sums over each element's own body
-                BoundaryOperator(geometry, True).discrete("matrix_free").self_blocks()
+                discrete_form(BoundaryOperator(geometry, True), "matrix_free").self_blocks()
 
-            op = BoundaryOperator(geometry, True).discrete("matrix_free")
+            op = discrete_form(BoundaryOperator(geometry, True), "matrix_free")
             op.matvec(q)  # compile and build the self blocks outside the timing
             times[split] = (best_time(assemble, args.repeats), best_time(self_blocks, args.repeats),
                             best_time(lambda: op.matvec(q), args.repeats))

@@ -31,7 +31,7 @@ from common import arguments, best_time, output, print_table, pyplot, save_chart
 from warpbem.app.progress import Progress
 from warpbem import Body, ContactResolutionWarning, MobilitySolver, mesh, runtime
 from warpbem.hydro.geometry import SurfaceGeometry
-from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions
+from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions, discrete_form
 from warpbem.hydro.treecode import TreecodeOptions
 from warpbem.kernels import integrals
 from warpbem.hydro.options import SolverOptions
@@ -105,10 +105,11 @@ def main():
         row = dict(cells=n, elements=geometry.n_elements, matrix_GB=matrix_gb)
         reference = None
         if n <= args.direct_max:
-            plain = BoundaryOperator(geometry, True, QuadratureOptions(adaptive=False)).discrete("matrix_free", device)
+            plain = discrete_form(BoundaryOperator(geometry, True, QuadratureOptions(adaptive=False)), "matrix_free",
+                                  device)
             plain.matvec(q)  # compile, self blocks
             row["warp_free_apply_s"], row["cores_free_apply"] = cores_busy(lambda: plain.matvec(q))
-            adaptive = BoundaryOperator(geometry, True, QuadratureOptions()).discrete("matrix_free", device)
+            adaptive = discrete_form(BoundaryOperator(geometry, True, QuadratureOptions()), "matrix_free", device)
             reference = adaptive.matvec(q)
             row["direct_product_s"] = best_time(lambda: adaptive.matvec(q), 1)
             if n <= args.numpy_max:
@@ -116,7 +117,7 @@ def main():
                 row["numpy_over_warp"] = row["numpy_apply_s"] / row["warp_free_apply_s"]
                 row["max_abs_diff"] = float(np.abs(numpy_baseline.apply(geometry, q, True) - plain.matvec(q)).max())
         if matrix_gb <= args.dense_max_gb:
-            dense = BoundaryOperator(geometry, True, QuadratureOptions()).discrete("dense", device)
+            dense = discrete_form(BoundaryOperator(geometry, True, QuadratureOptions()), "dense", device)
             row["assembly_s"], row["cores_assembly"] = cores_busy(dense.matrix)
             row["dense_product_s"] = best_time(lambda: dense.matvec(q), 3)  # BLAS A @ x: the floor
             if reference is not None:
@@ -126,8 +127,8 @@ def main():
         for tolerance in args.tolerances:
             label = f"{tolerance:.0e}"
             t = time.perf_counter()
-            tree = BoundaryOperator(geometry, True, QuadratureOptions()).discrete("treecode", device,
-                                       treecode=TreecodeOptions(tolerance=tolerance))
+            tree = discrete_form(BoundaryOperator(geometry, True, QuadratureOptions()), "treecode", device,
+                                 treecode=TreecodeOptions(tolerance=tolerance))
             tree.matvec(q)  # the first product assembles the stored near field
             row[f"tree{label}_setup_s"] = time.perf_counter() - t
             out = tree.matvec(q)
@@ -224,12 +225,12 @@ def tolerance_sweep(args, device, progress) -> list:
     bodies = cells(args.sweep_cells)
     geometry = SurfaceGeometry.from_bodies(bodies, QuadratureOptions().order, 1.0, True)
     q = np.random.default_rng(1).standard_normal(3 * geometry.n_elements)
-    exact = BoundaryOperator(geometry, True, QuadratureOptions()).discrete("matrix_free", device).matvec(q)
+    exact = discrete_form(BoundaryOperator(geometry, True, QuadratureOptions()), "matrix_free", device).matvec(q)
     rows = []
     for tolerance in args.sweep:
         t = time.perf_counter()
-        tree = BoundaryOperator(geometry, True, QuadratureOptions()).discrete("treecode", device,
-                                   treecode=TreecodeOptions(tolerance=tolerance))
+        tree = discrete_form(BoundaryOperator(geometry, True, QuadratureOptions()), "treecode", device,
+                             treecode=TreecodeOptions(tolerance=tolerance))
         out = tree.matvec(q)
         far = tree.far_field
         rows.append(dict(tolerance=tolerance, error=float(np.linalg.norm(out - exact) / np.linalg.norm(exact)),

@@ -6,7 +6,7 @@ import pytest
 
 import warpbem as wb
 from warpbem.hydro.geometry import SurfaceGeometry, density_basis, density_points
-from warpbem.hydro.operators import BoundaryOperator
+from warpbem.hydro.operators import BoundaryOperator, discrete_form
 
 
 @pytest.mark.parametrize("p", [1, 2, 3])
@@ -21,7 +21,7 @@ def test_density_basis_is_lagrange_on_its_points_and_sums_to_one(p):
 def _operator(k, p, wall, mode="dense"):
     body = wb.Body(wb.mesh.sphere(1.0, k), position=(0, 0, 1.5) if wall else (0, 0, 0))
     geometry = SurfaceGeometry.from_bodies([body], 2, 1.0, wall, 0.0, density_order=p)
-    return geometry, BoundaryOperator(geometry, wall).discrete(mode)
+    return geometry, discrete_form(BoundaryOperator(geometry, wall), mode)
 
 
 def _rotation_residual(k, p, wall):

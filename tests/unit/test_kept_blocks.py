@@ -8,7 +8,7 @@ import pytest
 
 import warpbem as wb
 from warpbem.hydro.geometry import SurfaceGeometry
-from warpbem.hydro.operators import BoundaryOperator, KeptBlocks, QuadratureOptions
+from warpbem.hydro.operators import BoundaryOperator, KeptBlocks, QuadratureOptions, discrete_form
 
 SPHERE = wb.mesh.sphere(1.0, 2)
 A = wb.Body(SPHERE, position=(0.0, 0.0, 1.5), fixed=True)
@@ -22,7 +22,7 @@ def description(bodies, **kwargs):
 
 
 def fresh(bodies) -> np.ndarray:
-    return description(bodies).discrete("dense").to_dense()
+    return discrete_form(description(bodies), "dense").to_dense()
 
 
 def moving(position):
@@ -31,11 +31,11 @@ def moving(position):
 
 def test_unmoved_bodies_keep_their_blocks_in_place_and_the_matrix_is_the_fresh_one():
     store = KeptBlocks()
-    first = description([A, B, moving(FAR)]).discrete("dense", kept=store)
+    first = discrete_form(description([A, B, moving(FAR)]), "dense", kept=store)
     pointer = first.matrix().ptr
     assert not first.reused_bodies.any()  # nothing was held
     moved = [A, B, moving((-4.5, 1.0, 2.5))]  # the moving cell keeps its element count
-    second = description(moved).discrete("dense", kept=store)
+    second = discrete_form(description(moved), "dense", kept=store)
     np.testing.assert_array_equal(second.to_dense(), fresh(moved))
     assert second.reused_bodies.tolist() == [True, True, False]
     assert store.placement == "in place" and second.matrix().ptr == pointer
@@ -48,10 +48,10 @@ def test_a_kept_block_moves_within_its_buffer_when_the_moving_cell_shrinks():
     """The moving cell first, refined near the wall, then far from it: its element count falls,
     the kept cells' block shifts towards the start within the same buffer."""
     store = KeptBlocks()
-    near = description([moving(NEAR_WALL), A, B]).discrete("dense", kept=store)
+    near = discrete_form(description([moving(NEAR_WALL), A, B]), "dense", kept=store)
     pointer = near.matrix().ptr
     bodies = [moving(FAR), A, B]
-    far = description(bodies).discrete("dense", kept=store)
+    far = discrete_form(description(bodies), "dense", kept=store)
     np.testing.assert_array_equal(far.to_dense(), fresh(bodies))
     assert far.size < near.size and far.reused_bodies.tolist() == [False, True, True]
     assert store.placement == "moved" and far.matrix().ptr == pointer
@@ -61,10 +61,10 @@ def test_kept_blocks_are_gathered_into_a_new_matrix_where_they_cannot_move_in_pl
     """Kept bodies on either side of a moving cell whose count changes are not one block: they
     are gathered into a new buffer, and the store then holds that one only."""
     store = KeptBlocks()
-    first = description([A, moving(FAR), B]).discrete("dense", kept=store)
+    first = discrete_form(description([A, moving(FAR), B]), "dense", kept=store)
     pointer = first.matrix().ptr
     bodies = [A, moving(NEAR_WALL), B]
-    second = description(bodies).discrete("dense", kept=store)
+    second = discrete_form(description(bodies), "dense", kept=store)
     np.testing.assert_array_equal(second.to_dense(), fresh(bodies))
     assert second.size > first.size and second.reused_bodies.tolist() == [True, False, True]
     assert store.placement == "gathered" and second.matrix().ptr != pointer
@@ -74,7 +74,7 @@ def test_kept_blocks_are_gathered_into_a_new_matrix_where_they_cannot_move_in_pl
 def test_only_an_operator_of_the_same_kind_quadrature_and_precision_takes_kept_blocks():
     store = KeptBlocks()
     bodies = [A, B, moving(FAR)]
-    description(bodies).discrete("dense", kept=store).matrix()
+    discrete_form(description(bodies), "dense", kept=store).matrix()
     same = description(bodies)
     assert store.reusable_bodies(same.signature("cpu"), same.geometry).all()
     for other in (dict(kind="adjoint_double_layer"), dict(quadrature=QuadratureOptions(order=3)),

@@ -8,7 +8,7 @@ import numpy as np
 
 from warpbem import Body, mesh
 from warpbem.hydro.geometry import SurfaceGeometry
-from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions
+from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions, discrete_form
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 import numpy_baseline  # noqa: E402
@@ -19,6 +19,6 @@ def test_numpy_baseline_matches_warp_operator(rng):
     for wall in (False, True):
         bodies = [Body(s, position=(0, 0, 1.6)), Body(s, position=(2.4, 0.3, 1.3))]
         geometry = SurfaceGeometry.from_bodies(bodies, 3, 1.0, wall)
-        op = BoundaryOperator(geometry, wall, QuadratureOptions(adaptive=False)).discrete("matrix_free")
+        op = discrete_form(BoundaryOperator(geometry, wall, QuadratureOptions(adaptive=False)), "matrix_free")
         q = rng.standard_normal(op.size)
         np.testing.assert_allclose(numpy_baseline.apply(geometry, q, wall), op.matvec(q), rtol=0, atol=1e-12)

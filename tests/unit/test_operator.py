@@ -7,13 +7,13 @@ from warpbem import Body, mesh, runtime
 from warpbem.kernels import launch
 from warpbem.hydro.geometry import SurfaceGeometry
 from warpbem.hydro.completed_double_layer import CompletedDoubleLayer
-from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions, choose_mode
+from warpbem.hydro.operators import BoundaryOperator, QuadratureOptions, choose_mode, discrete_form
 
 
 def make_operator(bodies, wall, mode="dense", device="cpu", kind="double_layer", **quadrature):
     options = QuadratureOptions(**{"order": 3, **quadrature})
     geometry = SurfaceGeometry.from_bodies(bodies, options.order, 1.0, wall)
-    return BoundaryOperator(geometry, wall, options, kind).discrete(mode, device)
+    return discrete_form(BoundaryOperator(geometry, wall, options, kind), mode, device)
 
 
 def two_spheres_near_wall():
@@ -52,7 +52,7 @@ def test_every_discrete_form_is_a_linear_operator_of_the_same_matrix(rng):
     SciPy's LinearOperator protocol (``@``) as its own ``apply``."""
     geometry = SurfaceGeometry.from_bodies(two_spheres_near_wall(), 2, 1.0, True)
     description = BoundaryOperator(geometry, True)
-    forms = {mode: description.discrete(mode) for mode in ("dense", "matrix_free", "treecode")}
+    forms = {mode: discrete_form(description, mode) for mode in ("dense", "matrix_free", "treecode")}
     matrices = {mode: form.to_dense() for mode, form in forms.items()}
     scale = np.abs(matrices["dense"]).max()
     for mode in ("matrix_free", "treecode"):
@@ -61,7 +61,7 @@ def test_every_discrete_form_is_a_linear_operator_of_the_same_matrix(rng):
     for form in forms.values():
         np.testing.assert_array_equal(form @ q, form.apply(q))
     with pytest.raises(ValueError, match="double layer only"):
-        BoundaryOperator(geometry, True, kind="single_layer").discrete("treecode")
+        discrete_form(BoundaryOperator(geometry, True, kind="single_layer"), "treecode")
     with pytest.raises(ValueError, match="operator kind"):
         BoundaryOperator(geometry, True, kind="stokeslet")
 
@@ -151,8 +151,8 @@ def test_auto_mode_follows_the_one_rule():
     layer and matrix-free for the other kinds."""
     bodies = two_spheres_near_wall()
     geometry = SurfaceGeometry.from_bodies(bodies, 3, 1.0, True)
-    assert BoundaryOperator(geometry, True).discrete().mode == "dense"  # 0.84 MB here
-    assert BoundaryOperator(geometry, True, kind="adjoint_double_layer").discrete().mode == "dense"
+    assert discrete_form(BoundaryOperator(geometry, True)).mode == "dense"  # 0.84 MB here
+    assert discrete_form(BoundaryOperator(geometry, True, kind="adjoint_double_layer")).mode == "dense"
     too_large = int(np.sqrt(runtime.total_memory(runtime.resolve_device("cpu")) / 8)) + 1
     assert choose_mode(too_large) == "treecode"
     assert choose_mode(too_large, kind="single_layer") == "matrix_free"
@@ -167,7 +167,7 @@ def test_single_layers_of_a_uniform_density_on_a_sphere(mode, kind, exact, devic
     3.6e-4 and 6.2e-5 measured)."""
     options = QuadratureOptions(order=2)
     geometry = SurfaceGeometry.from_bodies([Body(mesh.sphere(1.0, 4))], 2, 1.0, False)
-    op = BoundaryOperator(geometry, False, options, kind).discrete(mode, device)
+    op = discrete_form(BoundaryOperator(geometry, False, options, kind), mode, device)
     density = np.tile([0.3, -0.2, 1.0], geometry.n_elements)
     u = op.matvec(density).reshape(-1, 3)
     assert np.abs(u - exact * density[:3]).max() < 1e-3 * exact
@@ -178,8 +178,8 @@ def test_self_blocks_written_on_the_device_equal_the_host_ones(kind, density_ord
     """The Warp kernels that write the self blocks where the matrix lives (CUDA: no round trip
     through the host), run here on the CPU, give the host's BLAS row sums (or Duffy blocks)."""
     geometry = SurfaceGeometry.from_bodies(two_spheres_near_wall(), 2, 1.0, True, density_order=density_order)
-    host = BoundaryOperator(geometry, True, kind=kind).discrete("dense")
-    device = BoundaryOperator(geometry, True, kind=kind).discrete("dense")
+    host = discrete_form(BoundaryOperator(geometry, True, kind=kind), "dense")
+    device = discrete_form(BoundaryOperator(geometry, True, kind=kind), "dense")
     expected = host.to_dense()
     matrix = device.matrix()
     values = matrix.numpy()
@@ -197,7 +197,7 @@ def test_the_gpu_dense_product_kernel_matches_blas(rng, dtype):
     kernels/assembly.py), run on the CPU against NumPy's BLAS on the same matrix; a row length
     that is not a multiple of the chunk exercises the padded last chunk."""
     geometry = SurfaceGeometry.from_bodies(two_spheres_near_wall(), 2, 1.0, True)
-    op = BoundaryOperator(geometry, True, dtype=dtype).discrete("dense", "cpu")
+    op = discrete_form(BoundaryOperator(geometry, True, dtype=dtype), "dense", "cpu")
     assert op.size % 256 != 0
     q = rng.standard_normal(op.size)
     blas = op.matvec(q)

@@ -10,7 +10,7 @@ import warpbem as wb
 from warpbem import runtime
 from warpbem.kernels import integrals
 from warpbem.hydro.geometry import SurfaceGeometry
-from warpbem.hydro.operators import BoundaryOperator, choose_mode
+from warpbem.hydro.operators import BoundaryOperator, choose_mode, discrete_form
 from warpbem.hydro.treecode import TreecodeOptions, chebyshev_points, interaction_offsets, lagrange_basis
 
 
@@ -28,7 +28,7 @@ def array_8x8():
         warnings.simplefilter("ignore", wb.ContactResolutionWarning)
         geometry = SurfaceGeometry.from_bodies(grid_of_spheres(8), 2, 1.0, True)
     poles = geometry.centres
-    direct = BoundaryOperator(geometry, True).discrete("matrix_free")
+    direct = discrete_form(BoundaryOperator(geometry, True), "matrix_free")
     rng = np.random.default_rng(7)
     q, forces = rng.standard_normal(3 * geometry.n_points), rng.standard_normal(poles.shape)
     return geometry, poles, q, forces, direct.matvec(q), direct.point_force_velocity(geometry.collocation, poles, forces)
@@ -76,8 +76,8 @@ def test_treecode_product_matches_the_direct_sum_within_its_tolerance(array_8x8,
     sum of the same element integrals: relative error below the tolerance asked for
     (TreecodeOptions), with more points per box for the tighter one."""
     geometry, poles, q, forces, exact, exact_forces = array_8x8
-    tree = BoundaryOperator(geometry, True).discrete("treecode",
-                               treecode=TreecodeOptions(tolerance=tolerance), point_sources=poles)
+    tree = discrete_form(BoundaryOperator(geometry, True), "treecode",
+                         treecode=TreecodeOptions(tolerance=tolerance), point_sources=poles)
     assert tree.far_field.tree.levels == 3
     error = np.linalg.norm(tree.matvec(q) - exact) / np.linalg.norm(exact)
     assert 1e-12 < error < tolerance  # a far field there is, and it is accurate
@@ -93,8 +93,8 @@ def test_stored_and_recomputed_near_fields_agree(array_8x8):
     """The near field assembled once (BLAS) and recomputed in each product are the same exact
     element integrals."""
     geometry, poles, q, *unused = array_8x8
-    stored, recomputed = (BoundaryOperator(geometry, True).discrete("treecode",
-                                              treecode=TreecodeOptions(tolerance=1e-3, near_field=mode))
+    stored, recomputed = (discrete_form(BoundaryOperator(geometry, True), "treecode",
+                                        treecode=TreecodeOptions(tolerance=1e-3, near_field=mode))
                           for mode in ("stored", "recomputed"))
     assert stored.near_field_stored and not recomputed.near_field_stored
     np.testing.assert_allclose(stored.matvec(q), recomputed.matvec(q), rtol=0, atol=1e-12)
@@ -104,8 +104,8 @@ def test_treecode_without_far_field_is_the_direct_sum():
     """A scene narrower than two leaves has no far field: every element is near."""
     geometry = SurfaceGeometry.from_bodies(grid_of_spheres(2), 2, 1.0, True)
     q = np.random.default_rng(3).standard_normal(3 * geometry.n_points)
-    tree = BoundaryOperator(geometry, True).discrete("treecode")
-    direct = BoundaryOperator(geometry, True).discrete("matrix_free")
+    tree = discrete_form(BoundaryOperator(geometry, True), "treecode")
+    direct = discrete_form(BoundaryOperator(geometry, True), "matrix_free")
     assert not tree.far_field.has_far_field
     np.testing.assert_allclose(tree.matvec(q), direct.matvec(q), rtol=0, atol=1e-12)
 
@@ -163,9 +163,9 @@ def test_treecode_options_are_checked():
         wb.SolverOptions(operator="fmm")
     geometry = SurfaceGeometry.from_bodies(grid_of_spheres(1), 2, 1.0, True)
     with pytest.raises(ValueError, match="double layer"):
-        BoundaryOperator(geometry, True, kind="single_layer").discrete("treecode")
+        discrete_form(BoundaryOperator(geometry, True, kind="single_layer"), "treecode")
     with pytest.raises(ValueError, match="treecode only"):
-        BoundaryOperator(geometry, True).discrete("dense").apply(
+        discrete_form(BoundaryOperator(geometry, True), "dense").apply(
             np.zeros(3 * geometry.n_points), np.zeros((7, 3)))
 
 
@@ -179,8 +179,8 @@ def test_interaction_matrices_follow_from_their_symmetry_class():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", wb.ContactResolutionWarning)
         geometry = SurfaceGeometry.from_bodies(grid_of_spheres(6, refinement=1), 2, 1.0, True)
-    tree = BoundaryOperator(geometry, True).discrete("treecode",
-                               treecode=TreecodeOptions(tolerance=1e-2)).far_field
+    tree = discrete_form(BoundaryOperator(geometry, True), "treecode",
+                         treecode=TreecodeOptions(tolerance=1e-2)).far_field
     level = 2
     targets = tree._proxies(level, "targets")
     size = len(targets)
@@ -204,9 +204,9 @@ def test_preconditioner_blocks_cut_from_the_stored_near_field_equal_the_assemble
     """Each body's own block, cut from the treecode's stored near field, is the block of the
     dense operator (the same element integrals and self blocks)."""
     geometry, *unused = array_8x8
-    tree = BoundaryOperator(geometry, True).discrete("treecode",
-                               treecode=TreecodeOptions(tolerance=1e-3, near_field="stored"))
-    dense = BoundaryOperator(geometry, True).discrete("dense")
+    tree = discrete_form(BoundaryOperator(geometry, True), "treecode",
+                         treecode=TreecodeOptions(tolerance=1e-3, near_field="stored"))
+    dense = discrete_form(BoundaryOperator(geometry, True), "dense")
     bodies = [0, 9, 63]
     assert all(tree._block_from_near_field(p) is not None for p in bodies)
     cut, assembled = tree.diagonal_blocks(bodies), dense.diagonal_blocks(bodies)

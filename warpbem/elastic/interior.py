@@ -33,7 +33,7 @@ import numpy as np
 
 from ..hydro.deflated import RigidModes, deflated_operator, deflated_solve
 from ..hydro.geometry import SurfaceGeometry
-from ..hydro.operators import BoundaryOperator, QuadratureOptions
+from ..hydro.operators import BoundaryOperator, QuadratureOptions, discrete_form
 from ..hydro.options import SolverOptions
 from ..surfaces.body import Body
 from ..surfaces.mesh import Mesh
@@ -86,8 +86,8 @@ class InteriorElasticity:
         quadrature = QuadratureOptions(order=order, adaptive=self.options.adaptive_quadrature)
 
         def matrix(kind):
-            return BoundaryOperator(self.geometry, False, quadrature, kind, self.options.dtype).discrete(
-                "dense", device).to_dense()
+            description = BoundaryOperator(self.geometry, False, quadrature, kind, self.options.dtype)
+            return discrete_form(description, "dense", device).to_dense()
 
         nu = self.poisson_ratio
         # scaled: lengths over L, tractions over G, so displacements come out over L

@@ -47,7 +47,7 @@ from ..surfaces.gaps import candidate_pairs, outer_radius
 from ..surfaces.quad9 import CENTRE_NODE
 from .completed_double_layer import all_completion_poles
 from .mobility import MobilitySolution, MobilitySolver, checked_bodies, checked_loads
-from .operators import BoundaryOperator, quadrature_strengths
+from .operators import BoundaryOperator, discrete_form, quadrature_strengths
 from .options import DEFAULT_CUTOFF
 from .treecode import FarField, TreecodeOptions
 
@@ -85,8 +85,9 @@ class BackgroundField:
         loads = np.concatenate([system.fixed_loads(p, x) for p in range(len(bodies))])
         self.pole_forces = system.pole_forces(loads)
         poles = all_completion_poles(geo)
-        self.operator = BoundaryOperator(geo, solver.flow.wall, solver.quadrature, "double_layer",
-                                         solver.options.dtype).discrete("matrix_free", solver.device, point_sources=poles)
+        self.operator = discrete_form(BoundaryOperator(geo, solver.flow.wall, solver.quadrature, "double_layer",
+                                                       solver.options.dtype), "matrix_free", solver.device,
+                                      point_sources=poles)
         self.far = self.values = None
         if geo.n_elements < tree_elements:
             return

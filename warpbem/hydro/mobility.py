@@ -25,7 +25,7 @@ from .block_factors import BlockFactors
 from .completed_double_layer import FORCE_UNIT, TORQUE_UNIT, CompletedDoubleLayer, all_completion_poles
 from .deflated import deflated_solve
 from .geometry import SurfaceGeometry
-from .operators import BoundaryOperator, KeptBlocks, QuadratureOptions, choose_mode
+from .operators import BoundaryOperator, KeptBlocks, QuadratureOptions, choose_mode, discrete_form
 from .options import Flow, SolverOptions
 
 
@@ -261,8 +261,8 @@ class MobilitySolver:
         description = BoundaryOperator(geometry, self.flow.wall, self.quadrature, "double_layer", options.dtype)
         if self._mode is None:  # "auto" of a solver built without its unknowns: decided once, here
             self._mode = choose_mode(description.size, options.dtype, self.device)
-        double_layer = description.discrete(self._mode, self.device, kept=self._kept, treecode=options.treecode,
-                                            point_sources=all_completion_poles(geometry))
+        double_layer = discrete_form(description, self._mode, self.device, kept=self._kept, treecode=options.treecode,
+                                     point_sources=all_completion_poles(geometry))
         return CompletedDoubleLayer(geometry, double_layer, fixed, previous), key, previous, length
 
     def _right_side(self, system, bodies, forces, torques, length: float, background: bool, ambient_flow):

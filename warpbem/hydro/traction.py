@@ -58,7 +58,7 @@ from ..surfaces.placement import check_placement
 from .deflated import RigidModes, deflated_operator, deflated_solve
 from .geometry import SurfaceGeometry
 from .mobility import checked_loads, checked_bodies
-from .operators import BoundaryOperator, QuadratureOptions
+from .operators import BoundaryOperator, QuadratureOptions, discrete_form
 from .options import Flow, SolverOptions
 
 
@@ -125,7 +125,8 @@ class TractionSolution:
         operator, _, _, length, stress_scale = self._single_layer
         adjoint = operator.description
         single = BoundaryOperator(adjoint.geometry, adjoint.wall, adjoint.quadrature, "single_layer", adjoint.dtype)
-        disturbance = single.discrete(operator.mode, operator.device).apply(self.traction.ravel() / stress_scale).reshape(-1, 3)
+        disturbance = discrete_form(single, operator.mode, operator.device).apply(
+            self.traction.ravel() / stress_scale).reshape(-1, 3)
         ambient = np.zeros_like(self.points)
         ambient[:, 0] = self.shear_rate * self.points[:, 2]
         return ambient - disturbance * stress_scale * length / self.viscosity
@@ -195,8 +196,8 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = Flow.visc
                 np.abs(fluid_torque).max() / length**3)
     scale = scale if scale > 0 else 1.0
     quadrature = QuadratureOptions(order=options.quadrature_order, adaptive=options.adaptive_quadrature)
-    adjoint = BoundaryOperator(geometry, wall, quadrature, "adjoint_double_layer", options.dtype).discrete(
-        options.operator, device)
+    adjoint = discrete_form(BoundaryOperator(geometry, wall, quadrature, "adjoint_double_layer", options.dtype),
+                            options.operator, device)
     # the right side in two parts, scaled: the ambient traction sigma_inf . n, and the rigid
     # modes' loads (the loads acting alone, without the flow: ``load_response``)
     normals = geometry.collocation_normals

@@ -128,3 +128,10 @@ class DenseOperator(DiscreteOperator):
         ranges = self.geometry.body_ranges
         return {p: np.array(host[3 * ranges[p][0] : 3 * ranges[p][1], 3 * ranges[p][0] : 3 * ranges[p][1]],
                             dtype=np.float64) for p in bodies}
+
+
+def assembled_alone(form: DiscreteOperator, body: int) -> np.ndarray:
+    """Body ``body``'s own block of ``form`` (``DiscreteOperator.diagonal_blocks``), the dense
+    matrix of the operator on its elements alone: the matrix-free forms' preconditioner blocks
+    (one body's block fits where the whole matrix does not)."""
+    return DenseOperator(form.body_alone(body), form.device).to_dense()

@@ -1,8 +1,9 @@
 """What a boundary-integral operator is, apart from how it is applied (bempp-cl's split of a
 boundary operator from its discrete forms; DESIGN.md §2): ``BoundaryOperator`` names the kernel
 ``kind``, the surfaces (a ``SurfaceGeometry``), the wall, the quadrature and the precision;
-``discrete`` gives one of its forms (``dense.py``, ``direct_sum.py``, ``treecode_form.py``),
-chosen by one rule, ``choose_mode``.
+``forms.discrete_form`` gives one of its forms (``dense.py``, ``direct_sum.py``,
+``treecode_form.py``), chosen by one rule, ``forms.choose_mode``. The forms import this module,
+never the reverse.
 
 The kinds (``kernels/assembly.py``) and their self blocks:
 
@@ -28,10 +29,6 @@ The kinds (``kernels/assembly.py``) and their self blocks:
 * "elastic_rotation", "elastic_dyadic": the two parts of the elastic double layer
   (``elastic/interior.py``), their self blocks from their own rigid-translation identity, as the
   double layer's.
-
-The mode rule: dense while the matrix takes at most DENSE_MEMORY_SHARE of the device's total
-memory, else the treecode (the double layer) or the direct sum (the other kinds). A solver
-decides it once, when it is built (``MobilitySolver``), and reports it.
 """
 
 from __future__ import annotations
@@ -40,16 +37,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ... import runtime
 from ...kernels.kinds import KINDS
 from ..geometry import SurfaceGeometry
-from ..options import OPERATOR_MODES
 
 SINGLE_LAYERS = ("single_layer", "inverse_distance")
 # kinds whose self block follows from the rigid-translation identity of their own row sums
 IDENTITY_KINDS = ("double_layer", "elastic_rotation", "elastic_dyadic")
-MODES = tuple(m for m in OPERATOR_MODES if m != "auto")  # the discrete forms; "auto": choose_mode
-DENSE_MEMORY_SHARE = 0.25  # dense while one matrix takes at most this share of the memory
 
 
 def dof_indices(points: np.ndarray) -> np.ndarray:
@@ -81,24 +74,11 @@ class QuadratureOptions:
             raise ValueError(f"max_level must be an integer in [0, 24], got {self.max_level!r}")
 
 
-def choose_mode(size: int, dtype: str = "float64", device="cpu", kind: str = "double_layer") -> str:
-    """The one rule for "auto" (module docstring), for an operator of ``size`` unknowns: "dense"
-    while the matrix takes at most DENSE_MEMORY_SHARE of the device's total memory (room for the
-    solver's factored blocks, and for a second matrix in the steps whose kept blocks cannot move
-    in place, ``kept_blocks.py``), else "treecode" for the double layer, "matrix_free" for the
-    other kinds. From the total, not the free memory: the free memory falls with the run's own
-    kept systems, and a run that chose by it switched to matrix-free part-way."""
-    itemsize = 8 if dtype == "float64" else 4
-    if size**2 * itemsize <= DENSE_MEMORY_SHARE * runtime.total_memory(runtime.resolve_device(device)):
-        return "dense"
-    return "treecode" if kind == "double_layer" else "matrix_free"
-
-
 @dataclass(frozen=True, eq=False)
 class BoundaryOperator:
     """The operator of one kernel ``kind`` (module docstring) over the elements of ``geometry``
     (scaled units), with the wall's images if ``wall``, integrated with ``quadrature`` in
-    ``dtype``; ``discrete`` applies it."""
+    ``dtype``; its discrete forms (``forms.discrete_form``) apply it."""
 
     geometry: SurfaceGeometry
     wall: bool
@@ -122,23 +102,3 @@ class BoundaryOperator:
         """What makes two operators' element integrals the same function of their elements: a
         kept block (``KeptBlocks``) serves only an operator of the same signature."""
         return (self.kind, self.wall, self.dtype, self.geometry.density_order, self.quadrature, str(device))
-
-    def discrete(self, mode: str = "auto", device="cpu", *, kept=None, treecode=None, point_sources=None):
-        """This operator applied as ``mode`` ("dense", "matrix_free": the direct sum, "treecode",
-        or "auto": ``choose_mode``) on ``device``. ``kept``: the ``KeptBlocks`` store a dense form
-        takes unmoved bodies' blocks from and leaves its own in; ``treecode``: the
-        ``TreecodeOptions``; ``point_sources``: (P, 3) poles whose point forces the forms sum
-        with the layer (the CDL's completions)."""
-        from .dense import DenseOperator
-        from .direct_sum import DirectSumOperator
-        from .treecode_form import TreecodeOperator
-
-        if mode == "auto":
-            mode = choose_mode(self.size, self.dtype, device, self.kind)
-        if mode not in MODES:
-            raise ValueError(f"operator mode must be one of {OPERATOR_MODES}, got {mode!r}")
-        if mode == "treecode":
-            return TreecodeOperator(self, device, point_sources, treecode)
-        if mode == "dense":
-            return DenseOperator(self, device, point_sources, kept)
-        return DirectSumOperator(self, device, point_sources)

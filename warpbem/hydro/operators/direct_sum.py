@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...kernels import integrals
+from .dense import assembled_alone
 from .discrete import DiscreteOperator
 
 
@@ -22,3 +23,7 @@ class DirectSumOperator(DiscreteOperator):
     def apply(self, density: np.ndarray, pole_forces: np.ndarray | None = None) -> np.ndarray:
         self._refuse_pole_forces(pole_forces)
         return self._listed_sum(density, self._lists["direct"])
+
+    def diagonal_blocks(self, bodies) -> dict:
+        """{p: body p's own block}, each assembled for the body alone."""
+        return {p: assembled_alone(self, p) for p in bodies}

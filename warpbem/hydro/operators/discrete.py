@@ -99,9 +99,10 @@ class DiscreteOperator(spla.LinearOperator):
         return BoundaryOperator(self.geometry.body(body), d.wall, d.quadrature, d.kind, d.dtype)
 
     def diagonal_blocks(self, bodies) -> dict:
-        """{p: the (3 E_p, 3 E_p) host float64 block of this operator for body p's own elements},
-        here each assembled for the body alone (its block fits where the whole matrix does not)."""
-        return {p: self.body_alone(p).discrete("dense", self.device).to_dense() for p in bodies}
+        """{p: the (3 E_p, 3 E_p) host float64 block of this operator for body p's own elements}:
+        cut from the dense form's matrix, assembled for the body alone by the others
+        (``dense.assembled_alone``)."""
+        raise NotImplementedError
 
     # -- point forces and the field off the surfaces ----------------------------------------
     def point_force_tensors(self, targets: np.ndarray, poles: np.ndarray) -> np.ndarray:

@@ -12,6 +12,7 @@ from ...kernels import integrals
 from ...surfaces.quad9 import CENTRE_NODE
 from ..geometry import SurfaceGeometry, basis_at_gauss_points
 from ..treecode import FarField, TreecodeOptions
+from .dense import assembled_alone
 from .description import BoundaryOperator, dof_indices
 from .discrete import DiscreteOperator
 
@@ -106,7 +107,7 @@ class TreecodeOperator(DiscreteOperator):
         out = {}
         for p in bodies:
             block = self._block_from_near_field(p)
-            out[p] = block if block is not None else self.body_alone(p).discrete("dense", self.device).to_dense()
+            out[p] = block if block is not None else assembled_alone(self, p)
         return out
 
     def _block_from_near_field(self, body: int):
