@@ -13,7 +13,7 @@ Cases (the scenes at k = 4, run past their end where they stop before 500 steps)
 
 Prints the table, writes results/bench/memory.csv and memory.png (RSS against step; --name
 changes the name). With PYTHONPATH pointing at another checkout the child processes measure that
-checkout's code (docs/dynamics.md: the commit before the fix, 944f8b3^).
+checkout's code (the commit before the fix, 944f8b3^: CHANGELOG.md; the table: docs/benchmarks.md).
 """
 
 import argparse
