@@ -42,6 +42,20 @@ def test_overlap_names_both_bodies_even_when_barely_touching():
         wb.solve_mobility(bodies, wall=False, forces=[[0, 0, 1.0], [0, 0, 0]], options=wb.SolverOptions(contact_refinement=0.0, density_order=1))
 
 
+def test_messages_call_named_bodies_by_their_names():
+    """A body's name (Body.name, Model.names, a scene's bodies.N.name) is how messages call it;
+    unnamed, or with the default name "body<i>", by its index."""
+    cell, dome = (wb.Body(SPHERE, position=(0, 0, 2.0), name=name) for name in ("free cell", "dome"))
+    with pytest.raises(wb.PlacementError, match="bodies 'free cell' and 'dome' overlap"):
+        wb.solve_mobility([cell, dome])
+    with pytest.raises(wb.PlacementError, match="body 'free cell' touches or crosses the wall"):
+        wb.solve_mobility([wb.Body(SPHERE, position=(0, 0, 0.5), name="free cell")])
+    # a time-stepped model's bodies carry the model's names (Simulator.geometry checks them)
+    model = wb.Model(meshes=[SPHERE, SPHERE], fixed=[False, True], names=["free cell", "body1"])
+    with pytest.raises(wb.PlacementError, match="bodies 'free cell' and 1 overlap"):
+        wb.Simulator(model).geometry(model.initial_state([[0, 0, 2.0], [1.0, 0, 2.0]]))
+
+
 def test_reference_point_must_be_inside_the_mesh():
     shifted = wb.mesh.Mesh(SPHERE.nodes + [3.0, 0, 0], SPHERE.elements)
     with pytest.raises(wb.PlacementError, match="body 0: its reference point"):
@@ -53,7 +67,7 @@ def test_reference_point_must_be_inside_the_mesh():
     (dict(torques=[[0, np.inf, 0]]), ValueError, r"torques\[0\] \(body 0\) is not finite"),
     (dict(viscosity=0.0), ValueError, r"viscosity: 0 is outside the allowed range \(0, 1000\]"),
     (dict(shear_rate=np.nan), ValueError, "shear_rate: expected a finite number"),
-    (dict(device="cuda:7"), ValueError, "device 'cuda:7' is not available"),
+    (dict(device="cuda:7"), wb.DeviceError, "device 'cuda:7' is not available"),
 ])
 def test_solver_arguments_are_checked(kwargs, error, message):
     with pytest.raises(error, match=message):

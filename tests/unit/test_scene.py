@@ -64,7 +64,7 @@ def test_arrays_expand_into_named_bodies_on_their_grid_sharing_one_mesh(tmp_path
     (lambda a: a.update(count=4), r"arrays.0.count: expected a list of 2 integers"),
     (lambda a: a.update(position=[0.0, 0.0, 1e-5]), r"arrays.0: unknown key 'position'"),
     (lambda a: a.pop("pitch"), r"arrays.0: missing required key 'pitch'"),
-    (lambda a: a.update(pitch=[5e-6, 25e-6]), r"initial placement: bodies 1 and 3 overlap"),
+    (lambda a: a.update(pitch=[5e-6, 25e-6]), r"initial placement: bodies 'dome 0 0' and 'dome 1 0' overlap"),
 ])
 def test_bad_arrays_name_the_field(tmp_path, change, message):
     array = json.loads(json.dumps(ARRAY))
@@ -88,6 +88,9 @@ def test_bad_arrays_name_the_field(tmp_path, change, message):
     # 200 nm above the wall is inside the 175 + 50 nm roughness layers: eq. 3.1 has no value there
     (lambda t: (t["physics"].update(repulsion=True), t["bodies"][0].update(position=[0.0, 0.0, 5.2e-6])),
      r"bodies.0.position: its roughness layer touches that of the wall"),
+    (lambda t: (t["physics"].update(repulsion=True), t["bodies"][0].update(name="free cell"),
+                t["bodies"].append(dict(t["bodies"][0], name="dome", position=[10.1e-6, 0.0, 8e-6]))),
+     r"bodies.0.position \('free cell'\): its roughness layer touches that of bodies.1 \('dome'\)"),
 ])
 def test_bad_scenes_name_the_field(tmp_path, change, message):
     table = json.loads(json.dumps(BASE))

@@ -86,6 +86,7 @@ from ..surfaces.body import rotation_matrix
 from ..surfaces.gaps import WALL
 from ..surfaces import quad9
 from ..surfaces.mesh import Mesh
+from ..surfaces.placement import body_label
 from .interior import InteriorElasticity, check_material
 from .shape import nodal_displacement, nodal_weights, shear_plane_deformation
 
@@ -286,20 +287,21 @@ class BoundDeformation(BoundInteraction):
         turn = np.einsum("eqi,eqi->eq", self._node_normals(nodes + displacement[:len(nodes)], i), self.normals[i])
         advice = (f"lower the viscous number mu gdot / G (G = {self.shear_modulus[i]:g} Pa) or the loads on the"
                   " cell, or model it as rigid")
+        who = f"body {body_label(self.model.names[i], i)}"
         if turn.min() <= 0.0:
-            raise DeformationError(f"body {i}: the deformed surface folds (an element's normal turned"
+            raise DeformationError(f"{who}: the deformed surface folds (an element's normal turned"
                                    f" {np.degrees(np.arccos(max(turn.min(), -1.0))):.0f} degrees from the reference"
                                    f" one, max |u| / a = {amplitude:.2f}): {advice}")
         if amplitude > LINEAR_LIMIT:
-            raise DeformationError(f"body {i}: its displacement reached {amplitude:.2f} of its radius, beyond"
+            raise DeformationError(f"{who}: its displacement reached {amplitude:.2f} of its radius, beyond"
                                    f" {LINEAR_LIMIT} where linear elasticity means nothing: {advice}")
         if amplitude > LINEAR_RANGE:
-            self._warn_once(i, "range", f"body {i}: displacement {amplitude:.2f} of its radius, past {LINEAR_RANGE}:"
+            self._warn_once(i, "range", f"{who}: displacement {amplitude:.2f} of its radius, past {LINEAR_RANGE}:"
                             " the linear material departs from a neo-Hookean one by ~10 % and more here")
         q = np.asarray(start_orientation, dtype=float) @ np.asarray(end_orientation, dtype=float)
         angle = 2.0 * np.arccos(min(abs(q), 1.0))
         if angle > ROTATION_PER_STEP:
-            self._warn_once(i, "turn", f"body {i} turned {angle:.2g} rad in a step of {dt:.3g} s: its shape lags"
+            self._warn_once(i, "turn", f"{who} turned {angle:.2g} rad in a step of {dt:.3g} s: its shape lags"
                             f" the material by about half that; a step below {ROTATION_PER_STEP} rad of turn"
                             " (time.dt_max) keeps the inclination accurate")
 
@@ -327,7 +329,8 @@ class BoundDeformation(BoundInteraction):
             # a patch the elements miss, whose Hertz approach a^2 / R (thesis eq. 4.9) matters
             if (self.deformable[body] and radius < self.element_size[body]
                     and radius**2 / self.radii[body] > UNRESOLVED_APPROACH):
-                self._warn_once(body, "patch", f"body {body}: its contact patch (Hertz radius {radius:.2g} m) is"
+                self._warn_once(body, "patch", f"body {body_label(self.model.names[body], body)}: its contact patch"
+                                f" (Hertz radius {radius:.2g} m) is"
                                 " narrower than its elements: the mesh, not Hertz, sets the contact's flattening")
         # the cells whose own loads' response the gaps leave out (module docstring: contacts)
         loaded = set() if self.own_loads_in_gaps else {body for body, _, _, _ in spread}

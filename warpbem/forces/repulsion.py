@@ -40,7 +40,7 @@ import numpy as np
 
 from ..options import option, validate
 from ..surfaces.gaps import WALL
-from ..surfaces.placement import PlacementError
+from ..surfaces.placement import PlacementError, body_label
 from .interaction import BoundInteraction, ImplicitCoordinates, Interaction
 
 NEGLIGIBLE_FORCE = 1e-18  # N: contacts whose force would be smaller are left out
@@ -123,8 +123,9 @@ class BoundRepulsion(BoundInteraction):
         for gap in contacts.within(search):
             eps = rep.separation(gap.distance, gap.other == WALL)
             if eps <= 0.0:
-                other = "the wall" if gap.other == WALL else f"body {gap.other}"
-                raise PlacementError(f"the roughness layers of body {gap.body} and {other} touch"
+                other = "the wall" if gap.other == WALL else f"body {body_label(bodies[gap.other].name, gap.other)}"
+                raise PlacementError(f"the roughness layers of body {body_label(bodies[gap.body].name, gap.body)}"
+                                     f" and {other} touch"
                                      f" (gap {gap.distance:.4g} m)")
             force, torque, points = np.zeros((n, 3)), np.zeros((n, 3)), np.full((n, 3), np.nan)
             for body, point, sign in ((gap.body, gap.point, 1.0), (gap.other, gap.other_point, -1.0)):

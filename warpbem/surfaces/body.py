@@ -47,6 +47,9 @@ class Body:
     ``surface_velocity`` (free bodies; (elements, 3), m/s, world frame): the velocity of each
     element's surface on top of the rigid motion (a deforming cell's, a squirmer's slip); only
     its non-rigid part counts, the rigid motion being what the solver finds. None: rigid.
+
+    ``name``: how messages call it ("bodies 'free cell' and 'dome' overlap"); None: by its index
+    in the list of bodies.
     """
 
     mesh: Mesh
@@ -56,6 +59,7 @@ class Body:
     velocity: tuple = (0.0, 0.0, 0.0)
     angular_velocity: tuple = (0.0, 0.0, 0.0)
     surface_velocity: np.ndarray | None = None
+    name: str | None = None
 
     def __post_init__(self):
         if not isinstance(self.mesh, Mesh):
@@ -86,6 +90,8 @@ class Body:
                 raise ValueError("a surface_velocity is for free bodies; a fixed body's surface moves rigidly")
             slip.setflags(write=False)
             object.__setattr__(self, "surface_velocity", slip)
+        if self.name is not None and not isinstance(self.name, str):
+            raise TypeError(f"name must be a string or None, got {self.name!r}")
 
     def rotation(self) -> np.ndarray:
         return rotation_matrix(self.orientation)
@@ -93,3 +99,4 @@ class Body:
     def world_nodes(self) -> np.ndarray:
         """(n_nodes, 3) node positions in the world frame, metres."""
         return self.mesh.nodes @ self.rotation().T + self.position
+

@@ -13,6 +13,12 @@ class PlacementError(ValueError):
     """Bodies placed where the problem has no solution (overlap, wall crossing)."""
 
 
+def body_label(name: str | None, i: int) -> str:
+    """Body ``i`` named ``name`` as messages call it: the name quoted ("body 'dome'"), or, with no
+    name or the default one ("body3", ``Model``, scenes), the index ("body 3")."""
+    return str(i) if name is None or name == f"body{i}" else repr(name)
+
+
 def winding_number(points: np.ndarray, element_nodes: np.ndarray, order: int = 4) -> np.ndarray:
     """Solid angle of a closed surface seen from each point over 4 pi: 1 inside, 0 outside
     (Gauss's law, (1/4 pi) int (x - p) . n / |x - p|^3 dS)."""
@@ -72,13 +78,13 @@ def check_placement(bodies, wall: bool) -> None:
     for i, body in enumerate(bodies):
         if not body.mesh.encloses_origin():
             raise PlacementError(
-                f"body {i}: its reference point (position) lies outside its mesh; the mesh"
-                " coordinates must be given about a point inside the body"
+                f"body {body_label(bodies[i].name, i)}: its reference point (position) lies outside its mesh;"
+                " the mesh coordinates must be given about a point inside the body"
             )
         lowest = samples[i][:, 2].min()
         if wall and lowest <= 0.0:
             raise PlacementError(
-                f"body {i} touches or crosses the wall z = 0: its lowest point is at"
+                f"body {body_label(bodies[i].name, i)} touches or crosses the wall z = 0: its lowest point is at"
                 f" z = {lowest:.4g} m (centre at z = {body.position[2]:.4g} m)"
             )
     if len(bodies) == 1:  # no pair: no bounding spheres, no tree (a third of this check for one body)
@@ -93,6 +99,6 @@ def check_placement(bodies, wall: bool) -> None:
             depth = min(signed_distance(samples[j], nodes_i).min(), signed_distance(samples[i], nodes_j).min())
             if depth <= 0.0:
                 raise PlacementError(
-                    f"bodies {i} and {j} overlap (centres {bodies[i].position.tolist()} and"
-                    f" {bodies[j].position.tolist()} m)"
+                    f"bodies {body_label(bodies[i].name, i)} and {body_label(bodies[j].name, j)} overlap (centres"
+                    f" {bodies[i].position.tolist()} and {bodies[j].position.tolist()} m)"
                 )
