@@ -12,6 +12,8 @@ from pathlib import Path
 
 import h5py
 
+from tests.verification.sphere_wall_series import free_sphere_in_shear
+
 ROOT = Path(__file__).resolve().parents[2]
 TINY_SCENE = """
 [flow]
@@ -63,9 +65,11 @@ def test_wheel_installs_and_runs_outside_the_checkout(tmp_path):
         start, end = f["position"][0, 0], f["position"][-1, 0]
     # the start frame and one per step of dt_max up to end = 2 dt_max
     assert len(time) == 3 and abs(time[-1] - 2.0e-4) < 1e-12
-    # a free sphere in wall shear travels with the flow, slower than the undisturbed flow at its
-    # centre (Goldman, Cox & Brenner 1967: U = 0.91 gdot h at h/a = 1.5, more at h/a = 1.4 here)
-    # and at a constant height (no lift in Stokes flow; the coarse mesh's error is far below)
-    travel = end[0] - start[0]
-    assert 0.5 * 100.0 * 7.0e-6 * 2.0e-4 < travel < 100.0 * 7.0e-6 * 2.0e-4
+    # a free sphere in wall shear travels with the flow at U = X gdot h, X = 0.8938 at h/a = 1.4
+    # (Goldman, Cox & Brenner 1967b, Chem. Eng. Sci. 22:653; the exact bipolar series of
+    # tests/verification/sphere_wall_series.py), and at a constant height (no lift in Stokes
+    # flow). The k = 2 mesh errs by +0.47 % in U here (k = 3: +0.42 %, k = 4: +0.24 %; this scene
+    # run in the checkout): 1 % allowed, twice the discretisation error
+    travel, exact = end[0] - start[0], free_sphere_in_shear(1.4)["U_over_gdot_h"] * 100.0 * 7.0e-6 * 2.0e-4
+    assert abs(travel / exact - 1) < 0.01, travel / exact - 1
     assert abs(end[2] - start[2]) < 1e-3 * travel and abs(end[1] - start[1]) < 1e-3 * travel
