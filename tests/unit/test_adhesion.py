@@ -15,6 +15,7 @@ from warpbem.forces import hertz
 from warpbem.dynamics import Model
 from warpbem.forces.adhesion import Adhesion
 from warpbem.forces.bond_model import BOLTZMANN, BondOptions
+from warpbem.hydro.options import BONDS_REUSE_TOLERANCE
 from warpbem.surfaces.body import Body
 from warpbem.surfaces.gaps import Contacts, GapFinder
 from tests.scene_points import sweep_scenes
@@ -109,11 +110,27 @@ def test_patch_lowering_is_johnsons_hertz_surface():
     assert got[-1] == pytest.approx(4 * a**3 / (3 * np.pi * radius * rho[-1]) - a**2 / radius, rel=0.01)
 
 
+def bond_force_eq_4_3(tips, anchors, compression=False):
+    """The force of each bond on its microvillus tip x_m, written from the thesis's eq. 4.3 (Bell
+    1978's bonds as Hookean springs, as in Dembo et al. 1988, Proc. R. Soc. B 234:55):
+    F_bond = sigma (|x_b| - lambda) x_b / |x_b| with x_b = x_o - x_m the vector from the tip to
+    the ligand x_o, sigma and lambda of Table 4.1; with ``compression`` false (the default) a
+    bond shorter than lambda is slack and carries nothing."""
+    sigma, rest = TABLE_4_1["spring_constant"], TABLE_4_1["equilibrium_length"]
+    x_b = np.asarray(anchors, dtype=float) - np.asarray(tips, dtype=float)
+    length = np.sqrt(np.sum(x_b**2, axis=1, keepdims=True))
+    stretch = length - rest
+    if not compression:
+        stretch = np.where(stretch > 0.0, stretch, 0.0)
+    return sigma * stretch * x_b / length
+
+
 def test_bond_loads_match_numpy_and_the_vector_law_is_exact():
     """Eq. 4.3-4.4 on the device against NumPy: for random bond vectors on a cell, the per-cell
-    force sum_b F_b and torque sum_b (x_m - x_c) x F_b, and one bond against its force and torque
-    written by hand; and the implicit step's vector law:
-    f = -dU/dx and its 3 x 3 stiffness by central differences (tension only and both)."""
+    force sum_b F_b and torque sum_b (x_m - x_c) x F_b with F_b written from eq. 4.3
+    (``bond_force_eq_4_3``), and one bond against its force and torque written by hand; and the
+    implicit step's vector law: its force is eq. 4.3 on the bond vectors, f = -dU/dx and its
+    3 x 3 stiffness by central differences (tension only and both)."""
     adh = adhesion(max_bonds=50)
     rng = np.random.default_rng(3)
     body = Body(MESH, position=(1e-6, -2e-6, A + 0.3e-6), orientation=(0.9, 0.1, -0.3, 0.2))
@@ -127,7 +144,9 @@ def test_bond_loads_match_numpy_and_the_vector_law_is_exact():
     vector, moment = adh.geometry(adh._table(part), adh._frame([body], contacts, part))
     forces = adh.tip_forces(vector.numpy())
     force, torque, count = adh.reduce(adh._table(part)[0], moment, forces)
-    expected = adh.tip_forces(tips - part["anchor"][rows])
+    expected = bond_force_eq_4_3(tips, part["anchor"][rows])
+    stretched = np.linalg.norm(tips - part["anchor"][rows], axis=1) > TABLE_4_1["equilibrium_length"]
+    assert 0 < stretched.sum() < 30  # slack and stretched bonds both among them
     np.testing.assert_allclose(force[0], expected.sum(axis=0), rtol=1e-12)
     np.testing.assert_allclose(torque[0], np.cross(tips - body.position, expected).sum(axis=0), rtol=1e-12)
     assert count[0] == 30
@@ -149,6 +168,9 @@ def test_bond_loads_match_numpy_and_the_vector_law_is_exact():
     for compression in (False, True):
         law = adhesion(compression=compression).law
         energy, f, stiffness = law(x.ravel())
+        # x: the vector from the ligand to the tip, x_m - x_o = -x_b (bond_model.py)
+        np.testing.assert_allclose(f.reshape(-1, 3), bond_force_eq_4_3(x, np.zeros_like(x), compression),
+                                   rtol=1e-12, atol=1e-12 * 5e-4 * 40e-9)
         h = 1e-13
         for i in range(3):
             step = np.zeros_like(x)
@@ -414,7 +436,7 @@ def test_adhesion_scene_builds_the_interaction(tmp_path):
     s = scene.load(write(tmp_path, BONDS), ["bodies.0.shear_modulus=4.0e3", "adhesion.seed=9"])
     bonds = s.model.interaction("bond")
     assert bonds.seed == 9 and bonds.spring_constant == 5e-4 and bonds.shear_modulus[0] == 4e3
-    assert s.model.solver.reuse_tolerance == scene.ADHESION_REUSE_TOLERANCE
+    assert s.model.solver.reuse_tolerance == BONDS_REUSE_TOLERANCE
     assert scene.load(write(tmp_path, BONDS), ["physics.adhesion=false"]).model.solver.reuse_tolerance == 0.0
 
 
