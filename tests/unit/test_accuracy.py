@@ -68,6 +68,37 @@ def test_an_accuracy_out_of_reach_warns_and_solves_with_the_most_accurate_settin
     assert chosen.error_estimate == pytest.approx(errors.min())
 
 
+@pytest.mark.parametrize("model, gap, target", [(accuracy.WALL_MODEL, 0.1, 1e-3), (accuracy.SHEAR_MODEL, 0.5, 1e-3),
+                                                (accuracy.FIXED_MODEL, 0.1, 1e-2), (accuracy.PAIR_MODEL, 0.3, 1e-3)])
+def test_the_choice_is_the_cheapest_whose_estimate_times_its_margin_is_within_the_accuracy(model, gap, target):
+    """The bound is the estimate times the setting's margin (the refined one where its refinement
+    splits elements at the gap), within the accuracy; every setting predicted cheaper has its
+    bound above it, among them one whose estimate alone is within it (the margin changed the
+    choice)."""
+    term = accuracy._Term(model, gap)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        chosen = accuracy.choose(target, [term])
+    errors, ms, _ = accuracy.scene_costs([term])
+    margins = model.margin_at(gap)
+    best = accuracy.WALL_MODEL.settings.index((chosen.subdivisions, chosen.density_order, chosen.contact_refinement))
+    assert chosen.error_bound == pytest.approx(margins[best] * chosen.error_estimate) and chosen.error_bound <= target
+    cheaper = ms < chosen.predicted_ms
+    assert np.all(margins[cheaper] * errors[0][cheaper] > target)
+    assert np.any(errors[0][cheaper] <= target)
+
+
+def test_a_refined_setting_has_the_refined_margin_only_where_its_refinement_splits_elements():
+    """k = 2, p = 2, ratio 0.6 splits the sphere's lowest elements below h/a - 1 = 0.31
+    (refinement_threshold); above it the mesh is the unrefined one's, and so is its margin."""
+    model, index = accuracy.SHEAR_MODEL, accuracy.SHEAR_MODEL.settings.index((2, 2, 0.6))
+    threshold = accuracy.refinement_threshold(2, 0.6)
+    assert 0.2 < threshold < 0.5
+    assert model.margin_at(0.9 * threshold)[index] == model.margins[1] > model.margins[0]
+    assert model.margin_at(1.1 * threshold)[index] == model.margins[0]
+    assert model.margin_at(0.05)[model.settings.index((2, 2, 0.0))] == model.margins[0]
+
+
 @pytest.mark.parametrize("changes, message", [(dict(contact_refinement=1.0), "chooses it"),
                                               (dict(density_order=3), "densities 1 and 2"),
                                               (dict(), "accuracy")])

@@ -9,14 +9,17 @@ resistance matrix) and the normal one (Brenner 1961); U and Omega alone for a so
 ("shear"); a held sphere's force and torque in shear
 (GCB 1967b); two spheres pushed together (Stimson &
 Jeffery 1926) and towards each other (Maude 1961). The true error is the largest relative error
-of these. Measured over 84 cases (benchmarks/accuracy_target.py, docs/benchmarks.md) the
-estimate was at least 0.41 of the true error and at most 6.7 times it (at h/a = 1.02, 1e-2).
+of these. Measured over 84 cases (benchmarks/accuracy_target.py, docs/benchmarks.md) the true
+error was within the accuracy in all but the 2 the target warned it could not reach (at most
+1.19 times it), and the estimate at least 0.54 of the true error and at most 3.15 times it (two
+spheres 1 radius apart at 1e-2).
 """
 
 import numpy as np
 import pytest
 
 import warpbem as wb
+from warpbem.hydro.accuracy import MARGINS
 
 from .sphere_wall_series import (approaching_spheres_lambda, brenner_lambda, fixed_sphere_in_shear,
                                  free_sphere_in_shear, parallel_resistance, stimson_jeffery_lambda)
@@ -84,16 +87,39 @@ def pair_errors(gap: float, accuracy: float):
                          + [("fixed", g, 1e-3) for g in (0.2, 0.5, 1.0, 2.0)]
                          + [("pair", g, 1e-2) for g in (0.2, 0.4, 1.0, 2.0, 4.0)]
                          + [("pair", g, 1e-3) for g in (1.0, 2.0, 4.0)])
-def test_the_error_estimate_bounds_the_true_error_within_a_factor_3(part, gap, accuracy):
-    """The true error at most 3 times the estimate (the estimate's promise), and the estimate not
-    so pessimistic that it is useless (at most 4 times the true error here; 6.7 was measured at
-    h/a = 1.02, module docstring). The solve's error stays within 3 times the accuracy asked."""
+def test_the_true_error_is_within_the_accuracy_and_the_estimate_within_a_factor_3_2_of_it(part, gap, accuracy):
+    """The target's promise: the true error within the accuracy asked, the chosen setting's bound
+    (its estimate times its table's margin, hydro/accuracy.py MARGINS) too. The estimate within a
+    factor 3.2 of the true error either way: informative, not merely safe. Of these cases (and of
+    the check's 84) only the two spheres 1 radius apart at 1e-2 lie outside a factor 3: their
+    estimate 5.4e-3 is 3.15 times the true error."""
     errors = {"wall": lambda: wall_errors(1.0 + gap, accuracy), "shear": lambda: shear_errors(1.0 + gap, accuracy),
               "fixed": lambda: fixed_errors(1.0 + gap, accuracy), "pair": lambda: pair_errors(gap, accuracy)}
     error, chosen = errors[part]()
-    assert error <= 3 * chosen.error_estimate, (error, chosen)
-    assert chosen.error_estimate <= 4 * error, (error, chosen)
-    assert error <= 3 * accuracy and chosen.error_estimate <= accuracy
+    assert error <= accuracy and chosen.error_bound <= accuracy, (error, chosen)
+    assert 1 / 3.2 <= chosen.error_estimate / error <= 3.2, (error, chosen)
+
+
+@pytest.mark.parametrize("accuracy", [1e-2, 1e-3])
+def test_a_free_sphere_s_rotation_in_shear_at_h_1_5_is_within_the_accuracy(accuracy):
+    """A free sphere at h/a = 1.5 in wall shear, solved with no load: its angular velocity
+    against Goldman, Cox & Brenner 1967b's Omega / gdot (the exact series), within the accuracy
+    asked (the estimate alone gave 1.04e-3 at 1e-3)."""
+    exact = free_sphere_in_shear(1.5)["Omega_over_gdot"]
+    solution = wb.solve_mobility([wb.Body(LIBRARY_SPHERE, position=(0, 0, 1.5))], shear_rate=1.0, viscosity=1.0,
+                                 options=wb.SolverOptions(accuracy=accuracy))
+    assert abs(solution.angular_velocity[0, 1] / exact - 1) <= accuracy
+
+
+@pytest.mark.parametrize("accuracy", [1e-2, 1e-3])
+def test_a_free_sphere_s_normal_drag_at_h_1_1_is_within_the_accuracy(accuracy):
+    """A free sphere at h/a = 1.1 pushed towards the wall: its velocity against Brenner 1961's
+    U = F / (6 pi mu a lambda) (the exact series), within the accuracy asked (the estimate alone
+    gave the solve's five quantities to 1.22e-3 at 1e-3)."""
+    exact = 1.0 / (6 * np.pi * brenner_lambda(1.1))
+    solution = wb.solve_mobility([wb.Body(LIBRARY_SPHERE, position=(0, 0, 1.1))], viscosity=1.0,
+                                 forces=[[0, 0, -1]], options=wb.SolverOptions(accuracy=accuracy))
+    assert abs(-solution.velocity[0, 2] / exact - 1) <= accuracy
 
 
 def test_a_solve_to_an_accuracy_is_the_solve_of_the_settings_it_chose():
@@ -112,26 +138,33 @@ def test_a_solve_to_an_accuracy_is_the_solve_of_the_settings_it_chose():
     assert target.error_estimate == chosen.error_estimate and direct.error_estimate is None
 
 
-
 def test_a_time_stepped_model_solves_each_step_to_its_accuracy():
-    """``[solver] accuracy`` in a time-stepped model (issue 27 item 4): a neutrally buoyant
-    sphere at h/a = 1.1 in wall shear, given as the coarse k = 2 mesh. Its first step's velocity
-    against GCB 1967b: within 3 times the accuracy asked with the target, and at least 3 times
-    closer than the mesh as given with the time-stepping defaults (p = 1, ratio 3); measured 1.2e-4
-    against 9.8e-3."""
+    """``[solver] accuracy`` in a time-stepped model: a neutrally buoyant sphere at h/a = 1.1 in
+    wall shear, given as the coarse k = 2 mesh, over its first frame and 2 steps. Every frame's
+    velocity against GCB 1967b's at the frame's height: within the accuracy asked with the
+    target, and at least 3 times closer than the mesh as given with the time-stepping defaults
+    (p = 1, ratio 3); measured 1.2e-4 against 9.8e-3 at every frame."""
     from warpbem.dynamics import Flow, Model, Simulator, State, StepPolicy
 
-    exact = free_sphere_in_shear(1.1)["U_over_gdot_h"] * 1.1
-
-    def first_frame(options):
+    def frames(options):
         sim = Simulator(Model([wb.mesh.sphere(1.0, 2)], [False], Flow(shear_rate=1.0, viscosity=1.0),
-                              solver=options, policy=StepPolicy(dt_max=1e-3, dt_min=1e-4, contact_gap=1e-3)))
-        return sim.step(State(0.0, np.array([[0.0, 0.0, 1.1]]), np.array([[1.0, 0.0, 0.0, 0.0]])))[1]
+                              solver=options, policy=StepPolicy(dt_max=1e-2, dt_min=1e-4, contact_gap=1e-3)))
+        state = State(0.0, np.array([[0.0, 0.0, 1.1]]), np.array([[1.0, 0.0, 0.0, 0.0]]))
+        out = [sim.frame(state)]
+        for _ in range(2):
+            state, frame = sim.step(state)
+            out.append(frame)
+        return out
 
-    targeted = first_frame(wb.SolverOptions(accuracy=1e-3))
-    as_given = first_frame(wb.SolverOptions())
-    error = abs(targeted.velocity[0, 0] / exact - 1)
-    assert error < 3e-3 and abs(as_given.velocity[0, 0] / exact - 1) > 3 * error
-    # the frame records what was chosen (HDF5 columns accuracy_*), its estimate bounding the error
-    assert error <= 3 * targeted.derived["accuracy_error_estimate"] <= 3e-3
-    assert targeted.derived["accuracy_subdivisions"] > 2 and "accuracy_error_estimate" not in as_given.derived
+    def error(frame):
+        h = frame.positions[0, 2]
+        return abs(frame.velocity[0, 0] / (free_sphere_in_shear(h)["U_over_gdot_h"] * h) - 1)
+
+    targeted, as_given = frames(wb.SolverOptions(accuracy=1e-3)), frames(wb.SolverOptions())
+    assert [f.steps for f in targeted] == [0, 1, 2] and targeted[-1].time > 0
+    for frame, given in zip(targeted, as_given):
+        assert error(frame) <= 1e-3 and error(given) > 3 * error(frame), (frame.steps, error(frame), error(given))
+        # the frame records what was chosen (HDF5 columns accuracy_*): its estimate within the
+        # accuracy by at least the smallest margin, a mesh finer than the one given
+        assert frame.derived["accuracy_error_estimate"] * min(min(m) for m in MARGINS.values()) <= 1e-3
+        assert frame.derived["accuracy_subdivisions"] > 2 and "accuracy_error_estimate" not in given.derived
