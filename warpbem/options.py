@@ -8,15 +8,26 @@ declaration come
   its dotted scene key (``flow.viscosity``);
 * the scene-file reference (``reference_rows``, ``warpbem.app.reference``).
 
+An option may also declare the ``plausible`` magnitudes of its values (``warpbem.units``): a
+value outside them was most likely typed in another unit (a position of 6, meaning 6 um, is 6 m).
+They are checked while a scene file is read (``plausible_magnitudes``, on unless the scene says
+``any_scale = true``), not by the API, which takes any consistent units (Stokes flow has no scale
+of its own: the verification tests use unit spheres) and whose solvers rebuild their settings
+from numbers already accepted.
+
 A default that depends on the context (``None`` resolved elsewhere, e.g. the GMRES tolerance by
 the precision) says so in its doc and is resolved in one named place.
 """
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import dataclasses
 import math
 from dataclasses import dataclass
+
+from . import units
 
 
 class OptionError(ValueError):
@@ -28,7 +39,8 @@ class Spec:
     """What an option allows: ``kind`` (float, int, bool or str; with ``length`` > 0 a list of
     that many), a range [low, high] (``low_open``/``high_open``: excluded; of each item of a
     list), ``choices`` for strings (none: any string), ``optional``: None allowed (its meaning
-    in ``doc``); ``unit`` (SI) and ``doc`` for the reference."""
+    in ``doc``); ``unit`` (SI) and ``doc`` for the reference; ``plausible``: the (low, high)
+    magnitudes a value of a scene file may take (module docstring; none: any)."""
 
     kind: object
     doc: str
@@ -40,6 +52,7 @@ class Spec:
     choices: tuple = ()
     optional: bool = False
     length: int = 0
+    plausible: tuple = ()
 
     def range_text(self) -> str:
         if self.choices:
@@ -47,16 +60,26 @@ class Spec:
         items = f"{self.length} {'integers' if self.kind is int else 'numbers'}" if self.length else ""
         if self.kind in (bool, str) or (self.low == -math.inf and self.high == math.inf):
             return items
-        bounds = f"{'(' if self.low_open else '['}{self.low:g}, {self.high:g}{')' if self.high_open else ']'}"
+        closed = (not self.low_open and self.low > -math.inf, not self.high_open and self.high < math.inf)
+        bounds = f"{'[' if closed[0] else '('}{self.low:g}, {self.high:g}{']' if closed[1] else ')'}"
         return f"{items}, each in {bounds}" if items else bounds
+
+    def plausible_text(self) -> str:
+        """The plausible magnitudes, for the reference: "plausible 1e-08 to 0.001", "each of
+        plausible magnitude <= 0.01"."""
+        if not self.plausible:
+            return ""
+        low, high = self.plausible
+        text = f"plausible {low:g} to {high:g}" if low > 0 else f"plausible magnitude <= {high:g}"
+        return f"each of {text}" if self.length else text
 
 
 def option(default, doc: str, unit: str = "1", *, kind=None, low=-math.inf, high=math.inf, low_open=False,
-           high_open=False, choices=(), optional=None, length=0):
+           high_open=False, choices=(), optional=None, length=0, plausible=()):
     """A dataclass field declared with its ``Spec`` (kind from the default unless given)."""
     kind = kind or type(default)
     optional = default is None if optional is None else optional
-    spec = Spec(kind, doc, unit, low, high, low_open, high_open, tuple(choices), optional, length)
+    spec = Spec(kind, doc, unit, low, high, low_open, high_open, tuple(choices), optional, length, tuple(plausible))
     return dataclasses.field(default=default, metadata={"option": spec})
 
 
@@ -91,8 +114,40 @@ def check(where: str, spec: Spec, value):
         raise OptionError(f"{where}: expected an integer, got {value!r}")
     if (value < spec.low or value > spec.high or (spec.low_open and value == spec.low)
             or (spec.high_open and value == spec.high)):
-        raise OptionError(f"{where}: {value:g} is outside the allowed range {spec.range_text()}")
+        hint = units.hint(spec.unit, value) if value > spec.high else ""
+        raise OptionError(f"{where}: {value:g} is outside the allowed range {spec.range_text()}"
+                          + (f"; {hint}" if hint else ""))
+    if spec.plausible:
+        check_plausible(where, value, spec.unit, spec.plausible)
     return int(value) if spec.kind is int else float(value)
+
+
+_PLAUSIBLE_CHECKED = contextvars.ContextVar("plausible_checked", default=False)
+
+
+@contextlib.contextmanager
+def plausible_magnitudes(checked: bool = True):
+    """Within it, values are checked against their options' plausible magnitudes (a scene file
+    being read, unless it says ``any_scale = true``; module docstring)."""
+    token = _PLAUSIBLE_CHECKED.set(checked)
+    try:
+        yield
+    finally:
+        _PLAUSIBLE_CHECKED.reset(token)
+
+
+def check_plausible(where: str, value: float, unit: str, plausible: tuple, what: str = "") -> None:
+    """OptionError naming ``where`` if ``value`` (in ``unit``; ``what``: its description in the
+    message) lies outside the ``plausible`` (low, high) magnitudes while they are checked, with
+    the unit it was likely typed in."""
+    low, high = plausible
+    if not _PLAUSIBLE_CHECKED.get() or low <= abs(value) <= high:
+        return
+    over = abs(value) > high
+    hint = units.hint(unit, value) if over else ""
+    raise OptionError(f"{where}: {what}{value:g} {unit} is {'over' if over else 'under'} the plausible"
+                      f" {'magnitude ' if value < 0 else ''}{high if over else low:g} {unit}"
+                      + (f"; {hint}" if hint else "") + "; a scene meaning it says any_scale = true")
 
 
 def validate(instance, where: str = "") -> None:
@@ -137,7 +192,8 @@ def reference_cells(cls) -> list[tuple[str, str, str, str, str]]:
     for name, default, spec in declared(cls):
         shown = "-" if default is None else (str(default).lower() if isinstance(default, bool) else
                                              repr(list(default)) if isinstance(default, tuple) else repr(default))
-        cells.append((name, spec.unit, shown, spec.range_text() or "-", spec.doc))
+        allowed = "; ".join(text for text in (spec.range_text(), spec.plausible_text()) if text) or "-"
+        cells.append((name, spec.unit, shown, allowed, spec.doc))
     return cells
 
 

@@ -21,6 +21,15 @@ def test_body_rejects_bad_values():
         wb.Body(SPHERE, velocity=(1.0, 0, 0))
 
 
+def test_a_position_and_a_mesh_in_different_units_are_refused():
+    """6 meaning 6 um with a mesh in metres puts the cell a million of its sizes away; unit spheres
+    (Stokes flow has no scale of its own) and far placements of up to 1e5 sizes are fine."""
+    with pytest.raises(ValueError, match=r"position: 6 m is 1.2e\+06 times the body's size \(5e-06 m\): the"
+                                         r" position and the mesh are in different units"):
+        wb.Body(wb.mesh.sphere(5e-6, 1), position=(0.0, 0.0, 6.0))
+    assert wb.Body(SPHERE, position=(-9e4, 0.0, 2.0)).position[0] == -9e4
+
+
 def test_wall_crossing_names_the_body():
     bodies = [wb.Body(SPHERE, position=(0, 0, 3.0)), wb.Body(SPHERE, position=(5, 0, 0.9))]
     with pytest.raises(wb.PlacementError, match=r"body 1 touches or crosses the wall"):

@@ -99,6 +99,42 @@ def test_bad_scenes_name_the_field(tmp_path, change, message):
         scene.load(write(tmp_path, table))
 
 
+@pytest.mark.parametrize("change, message", [
+    (lambda t: t["bodies"][0].update(position=[0.0, 0.0, 6.0]),
+     r"bodies.0.position\[2\]: 6 m is over the plausible 0.01 m; lengths are in metres \(6 um is 6e-06 m\)"),
+    (lambda t: t["bodies"][0]["mesh"].update(radius=5.0), r"bodies.0.mesh.radius: 5 m is over the plausible 0.001 m"),
+    (lambda t: t["bodies"][0]["mesh"].update(radius=5e-12), r"bodies.0.mesh.radius: 5e-12 m is under the plausible 1e-08"),
+    (lambda t: t["flow"].update(viscosity=1.2),
+     r"flow.viscosity: 1.2 Pa s is over the plausible 0.1 Pa s; viscosities are in Pa s \(1.2 cP is 0.0012 Pa s\)"),
+    (lambda t: t["flow"].update(shear_rate=-2e5), r"flow.shear_rate: -200000 1/s is over the plausible magnitude 100000"),
+    (lambda t: t["bodies"][0].update(force=[0.0, 0.0, -10.0]), r"bodies.0.force\[2\]: -10 N is over the plausible"
+                                                                 r" magnitude 1e-06 N; forces are in newtons \(-10 pN"),
+])
+def test_implausible_magnitudes_are_refused_with_their_unit_unless_the_scene_allows_any_scale(change, message):
+    """A value typed in another unit (6 meaning 6 um is 6 m) is refused naming the field, the
+    bound (warpbem/units.py) and the unit; with any_scale = true the same scene is read as given."""
+    table = json.loads(json.dumps(BASE))
+    change(table)
+    with pytest.raises(scene.SceneError, match=message + ".*; a scene meaning it says any_scale = true"):
+        scene.parse(table)
+    read, given = scene.parse(dict(table, any_scale=True)), table["bodies"][0]
+    assert (read.model.flow.shear_rate, read.model.flow.viscosity) == (table["flow"]["shear_rate"],
+                                                                       table["flow"]["viscosity"])
+    body = read.bodies[0]
+    assert body.position == tuple(given["position"]) and body.force == tuple(given.get("force", (0.0, 0.0, 0.0)))
+    assert body.mesh.size() == pytest.approx(given["mesh"]["radius"], rel=1e-12)
+
+
+def test_a_mesh_file_in_micrometres_is_refused(tmp_path):
+    table = json.loads(json.dumps(BASE))
+    mesh.save(mesh.sphere(5.0, subdivisions=1), tmp_path / "cell_um.q9")
+    table["bodies"][0]["mesh"] = {"shape": "file", "path": "cell_um.q9"}
+    with pytest.raises(scene.SceneError, match=r"bodies.0.mesh.path: its size 5 m is over the plausible 0.001 m"):
+        scene.load(write(tmp_path, table))
+    with pytest.raises(scene.SceneError, match=r"any_scale: expected true or false, got 'yes'"):
+        scene.parse(dict(table, any_scale="yes"), tmp_path)
+
+
 def test_overrides_and_mesh_files(tmp_path):
     table = json.loads(json.dumps(BASE))
     mesh.save(mesh.spheroid(5e-6, 0.7, subdivisions=2), tmp_path / "cell.q9")

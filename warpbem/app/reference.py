@@ -34,7 +34,9 @@ def scene_reference() -> str:
     """The Markdown reference of every declared scene key: unit, default, allowed values, meaning."""
     lines = ["# Scene-file reference", "",
              "Generated from the options' declarations by `python -m warpbem.app.reference`; do not edit by hand.",
-             "Units are SI. A default of `-` is resolved from the context, as the meaning says.", ""]
+             "Units are SI. A default of `-` is resolved from the context, as the meaning says.",
+             "A value outside its plausible magnitudes was most likely typed in another unit (6 for 6 um) and is",
+             "refused, unless the scene says `any_scale = true` before its first table.", ""]
     for section, classes, what in TABLES:
         rows = [row for cls in classes for row in reference_rows(cls, section)]
         lines += [f"## [{section}]", "", what, "", "| key | unit | default | allowed | meaning |",

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import units
 from .mesh import Mesh
 
 
@@ -66,6 +67,7 @@ class Body:
             raise TypeError(f"mesh must be a warpbem.mesh.Mesh, got {type(self.mesh).__name__}")
         self.mesh.check()  # closed and outward, else the integral equation has no meaning
         object.__setattr__(self, "position", _vector("position", self.position, 3))
+        self._check_scale()
         q = _vector("orientation", self.orientation, 4)
         norm = np.linalg.norm(q)
         if norm < 1e-12:
@@ -92,6 +94,15 @@ class Body:
             object.__setattr__(self, "surface_velocity", slip)
         if self.name is not None and not isinstance(self.name, str):
             raise TypeError(f"name must be a string or None, got {self.name!r}")
+
+    def _check_scale(self):
+        """Refuse a position and a mesh in different units: a body farther from the origin than
+        units.FARTHEST_IN_SIZES of its own sizes (a 5e-6 m sphere placed at 6, meaning 6 um)."""
+        farthest = self.position[np.argmax(np.abs(self.position))]
+        if abs(farthest) > units.FARTHEST_IN_SIZES * self.mesh.size():
+            raise ValueError(f"position: {farthest:g} m is {abs(farthest) / self.mesh.size():.2g} times the body's size"
+                             f" ({self.mesh.size():.3g} m): the position and the mesh are in different units; both"
+                             f" are in metres (warpbem.units.um = {units.um:g})")
 
     def rotation(self) -> np.ndarray:
         return rotation_matrix(self.orientation)

@@ -116,8 +116,11 @@ class Mesh:
         return self._encloses_origin
 
     def size(self) -> float:
-        """Largest distance of a node from the reference point (the origin)."""
-        return float(np.linalg.norm(self.nodes, axis=1).max())
+        """Largest distance of a node from the reference point (the origin); remembered (each
+        Body checks its position against it)."""
+        if getattr(self, "_size", None) is None:
+            object.__setattr__(self, "_size", float(np.linalg.norm(self.nodes, axis=1).max()))
+        return self._size
 
     def check(self) -> "Mesh":
         """Raise MeshError unless the surface is closed, consistently oriented and outward.
