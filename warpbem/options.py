@@ -65,13 +65,13 @@ class Spec:
         return f"{items}, each in {bounds}" if items else bounds
 
     def plausible_text(self) -> str:
-        """The plausible magnitudes, for the reference: "plausible 1e-08 to 0.001", "each of
-        plausible magnitude <= 0.01"."""
+        """The plausible magnitudes, for the references: "scene files: plausible 1e-08 to 0.001",
+        "scene files: each of plausible magnitude <= 0.01" (the API does not check them)."""
         if not self.plausible:
             return ""
         low, high = self.plausible
         text = f"plausible {low:g} to {high:g}" if low > 0 else f"plausible magnitude <= {high:g}"
-        return f"each of {text}" if self.length else text
+        return f"scene files: {'each of ' if self.length else ''}{text}"
 
 
 def option(default, doc: str, unit: str = "1", *, kind=None, low=-math.inf, high=math.inf, low_open=False,
