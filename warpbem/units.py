@@ -1,5 +1,18 @@
 """SI units. Every public argument and result of warpbem is in SI; these names make scene
-values readable, e.g. ``5 * um``, ``1 * cP``."""
+values readable, e.g. ``5 * um``, ``1 * cP``: lengths ``m``, ``um``, ``nm``; times ``s``,
+``ms``; forces ``N``, ``pN``; pressures and moduli ``Pa``, ``kPa``; viscosity ``cP``
+(centipoise, 1e-3 Pa s); line force and surface tension ``dyn_per_cm`` (1e-3 N/m, a bond
+spring's stiffness in thesis Table 4.1); shear stress ``dyn_per_cm2`` (0.1 Pa).
+
+Examples
+--------
+>>> from warpbem.units import cP, dyn_per_cm, pN, um
+>>> radius, viscosity = 5 * um, 1.2 * cP       # m, Pa s
+>>> print(f"{radius:g} m, {viscosity:g} Pa s, {100 * pN:g} N, {0.5 * dyn_per_cm:g} N/m")
+5e-06 m, 0.0012 Pa s, 1e-10 N, 0.0005 N/m
+>>> print(f"{2.5e-7 / um:g} um")               # and back: divide by the unit
+0.25 um
+"""
 
 m = 1.0
 um = 1e-6

@@ -51,6 +51,22 @@ class Body:
 
     ``name``: how messages call it ("bodies 'free cell' and 'dome' overlap"); None: by its index
     in the list of bodies.
+
+    Examples
+    --------
+    A free cell passing an adherent one held at rest 0.25 um above the wall (thesis ch. 5.3),
+    and a cell placed through the wall, refused before any solve:
+
+    >>> import warpbem as wb
+    >>> sphere = wb.mesh.sphere(radius=5e-6, subdivisions=2)
+    >>> free = wb.Body(sphere, position=(-20e-6, 10.5e-6, 7.75e-6), name="free cell")
+    >>> adherent = wb.Body(sphere, position=(0.0, 0.0, 5.25e-6), fixed=True, name="adherent cell")
+    >>> free.fixed, adherent.fixed, adherent.velocity.tolist()
+    (False, True, [0.0, 0.0, 0.0])
+    >>> wb.solve_mobility([wb.Body(sphere, position=(0.0, 0.0, 4e-6))], shear_rate=100.0)
+    Traceback (most recent call last):
+    ...
+    warpbem.surfaces.placement.PlacementError: body 0 touches or crosses the wall z = 0: ...
     """
 
     mesh: Mesh
