@@ -3,6 +3,8 @@ its own body, no body touching or crossing the wall, no two bodies overlapping."
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import scipy.spatial
 
@@ -14,9 +16,12 @@ class PlacementError(ValueError):
 
 
 def body_label(name: str | None, i: int) -> str:
-    """Body ``i`` named ``name`` as messages call it: the name quoted ("body 'dome'"), or, with no
-    name or the default one ("body3", ``Model``, scenes), the index ("body 3")."""
-    return str(i) if name is None or name == f"body{i}" else repr(name)
+    """Body ``i`` named ``name`` as messages call it: the name quoted ("body 'dome'"); with no name
+    its index, with a default one ("body3", ``Model``, scenes) the index in it ("body 3", also in
+    a snapshot's list of its own)."""
+    if name is None:
+        return str(i)
+    return name[4:] if re.fullmatch(r"body\d+", name) else repr(name)
 
 
 def winding_number(points: np.ndarray, element_nodes: np.ndarray, order: int = 4) -> np.ndarray:
