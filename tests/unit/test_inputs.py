@@ -63,6 +63,10 @@ def test_messages_call_named_bodies_by_their_names():
     model = wb.Model(meshes=[SPHERE, SPHERE], fixed=[False, True], names=["free cell", "body1"])
     with pytest.raises(wb.PlacementError, match="bodies 'free cell' and 1 overlap"):
         wb.Simulator(model).geometry(model.initial_state([[0, 0, 2.0], [1.0, 0, 2.0]]))
+    # a model's default name is its number wherever the body sits (a lone snapshot's list: index 0)
+    from warpbem.surfaces.placement import body_label
+
+    assert [body_label(name, 0) for name in (None, "body3", "dome")] == ["0", "3", "'dome'"]
 
 
 def test_reference_point_must_be_inside_the_mesh():

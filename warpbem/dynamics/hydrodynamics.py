@@ -298,7 +298,7 @@ class HydrodynamicSolves:
         ``exact_if_too_close``: a snapped height too near the wall solves the body as it is (not
         kept) instead of raising."""
         position = np.array([0.0, 0.0, body.position[2]])
-        alone = Body(body.mesh, position=position, orientation=body.orientation)
+        alone = Body(body.mesh, position=position, orientation=body.orientation, name=body.name)
         entry, (lone,) = self._snapped([alone], spacing, [index])
         radii = self.model.outer_radii[[index]]
         try:
@@ -386,6 +386,6 @@ class HydrodynamicSolves:
                 entry += tuple(q)
                 orientation = q / np.linalg.norm(q)
             key.append(entry)
-            snapped.append(Body(b.mesh, position=cell * lattice, orientation=orientation, fixed=False))
+            snapped.append(Body(b.mesh, position=cell * lattice, orientation=orientation, fixed=False, name=b.name))
         return tuple(key), snapped
 
