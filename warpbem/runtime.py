@@ -89,7 +89,11 @@ def _native_stderr_of(call) -> list[str]:
     """The lines ``call()`` writes on file descriptor 2 (native code's stderr, which Python's
     ``sys.stderr`` does not see), kept from the terminal."""
     sys.stderr.flush()
-    saved = os.dup(2)
+    try:
+        saved = os.dup(2)
+    except OSError:  # no stderr at all (a detached process): nothing to keep back
+        call()
+        return []
     with tempfile.TemporaryFile(mode="w+b") as capture:
         os.dup2(capture.fileno(), 2)
         try:
