@@ -7,6 +7,18 @@ elasticity, deformable cells) -> ``dynamics`` (Model, State, the step) -> ``app`
 runs, sweeps, output, command line)."""
 
 from . import units
+from .app.run import run
+from .app.scene import RunSettings, Scene, SceneError
+from .app.scene import load as load_scene
+from .dynamics.frame import Frame
+from .dynamics.model import Model, StepPolicy
+from .dynamics.simulator import Simulator
+from .dynamics.state import State
+from .elastic.deformable import Deformation, DeformationOptions
+from .forces.adhesion import Adhesion
+from .forces.bond_model import BondOptions
+from .forces.external import ExternalLoads, Gravity
+from .forces.repulsion import Repulsion
 from .elastic.deformable import DeformationError, DeformationWarning
 from .hydro.accuracy import AccuracyWarning, ChosenSettings
 from .hydro.frozen import FrozenArraySolver
@@ -19,8 +31,11 @@ from .surfaces import mesh
 from .surfaces.body import Body
 from .surfaces.mesh import MeshError
 from .surfaces.placement import PlacementError
+from .runtime import DeviceError
 
 __version__ = "0.1.0"
-__all__ = ["mesh", "units", "Body", "Flow", "SolverOptions", "solve_mobility", "MobilitySolver", "FrozenArraySolver",
+__all__ = ["mesh", "units", "Model", "State", "Simulator", "StepPolicy", "Frame", "Scene", "RunSettings", "load_scene",
+           "run", "SceneError", "Gravity", "ExternalLoads", "Repulsion", "Adhesion", "BondOptions", "Deformation",
+           "DeformationOptions", "Body", "Flow", "SolverOptions", "solve_mobility", "MobilitySolver", "FrozenArraySolver",
            "MobilitySolution", "solve_traction", "TractionSolution", "TreecodeOptions", "ConvergenceError", "DeformationError", "DeformationWarning",
-           "MeshError", "PlacementError", "ContactResolutionWarning", "AccuracyWarning", "ChosenSettings", "__version__"]
+           "MeshError", "PlacementError", "DeviceError", "ContactResolutionWarning", "AccuracyWarning", "ChosenSettings", "__version__"]

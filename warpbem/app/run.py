@@ -16,6 +16,8 @@ from ..dynamics.simulator import Simulator
 from ..dynamics.state import State
 from . import scene as scenes
 from .io import RunFileError, TableWriter, complete_rows, open_result
+from .progress import eta_text
+from .scene import Scene
 
 # what may change when a run is resumed: nothing that would make the stored scene a false
 # account of the frames already written
@@ -31,9 +33,10 @@ def read_state(f, model, row: int) -> State:
     return State(float(f["time"][row]), f["position"][row], f["orientation"][row], int(f["steps"][row]), parts)
 
 
-def _resumed(output: Path, overrides):
-    """(scene, state of the last complete frame) of the run in ``output``, with ``overrides``
-    (RESUMABLE_KEYS only) applied to its stored scene."""
+def _resumed(output: Path, overrides, given: Scene | None):
+    """(scene, state of the last complete frame) of the run in ``output``: ``given`` (a scene
+    built in Python, which must be the one the file holds) or the file's stored scene with
+    ``overrides`` (RESUMABLE_KEYS only) applied."""
     for item in overrides:
         key = item.split("=", 1)[0]
         if key not in RESUMABLE_KEYS:
@@ -42,7 +45,16 @@ def _resumed(output: Path, overrides):
                                     f" {', '.join(RESUMABLE_KEYS)} may be set")
     with open_result(output, needs=("scene", "scene_folder", "time", "steps")) as f:
         stored = json.loads(f.attrs["scene"])
-        scene = scenes.parse(scenes.apply_overrides(stored, overrides), Path(f.attrs["scene_folder"]))
+        if given is not None:
+            if _unresumable(stored) != _unresumable(given.table()):
+                raise RunFileError(f"{output} holds a run of another scene than the one given; resume it with the"
+                                   " scene that wrote it, or start afresh with overwrite=True")
+            scene = given
+        elif "built_in" in stored:
+            raise RunFileError(f"{output} was run from a Python script (warpbem.Scene.of); resume it there with"
+                               " warpbem.run(scene, output, resume=True)")
+        else:
+            scene = scenes.parse(scenes.apply_overrides(stored, overrides), Path(f.attrs["scene_folder"]))
         columns = frame_columns(scene.model)
         missing = [name for name in columns if name not in f]
         if missing:
@@ -50,36 +62,66 @@ def _resumed(output: Path, overrides):
                                f" for its scene (written by an older version?); it cannot be resumed")
         rows = complete_rows(f, columns)
         if rows == 0:
-            raise RunFileError(f"{output}: the run has no complete frame to resume from")
+            raise RunFileError(f"{output}: the run was stopped before its first frame, so there is nothing to resume;"
+                               " start it afresh with --overwrite (Python: overwrite=True)")
         state = read_state(f, scene.model, rows - 1)
     if scene.end < state.time:
         raise scenes.SceneError(f"time.end: {scene.end:g} s is before the run's last frame (t = {state.time:g} s)")
     return scene, state
 
 
-def run(scene_path, output, overrides=(), device="cpu", resume=False, progress=print, overwrite=False) -> State:
-    """Run a scene to its end time; returns the final state. With ``resume``, ``output`` must be
-    an earlier run: its stored scene is used (``overrides`` may only extend it, RESUMABLE_KEYS)
-    and stepping continues from its last frame complete in every column. An existing
-    ``output`` is replaced only with ``overwrite`` (nothing written is lost by mistake)."""
-    output = Path(output)
+def _unresumable(table: dict) -> dict:
+    """A scene table less what a resumed run may change (RESUMABLE_KEYS, and frame_interval)."""
+    table = json.loads(json.dumps(table))  # a deep copy, tuples as lists as the file has them
+    for key in ("end", "frame_every", "frame_interval"):
+        table.get("time", {}).pop(key, None)
+    return table
+
+
+def run(scene, output, overrides=(), device="cpu", resume=False, progress=print, overwrite=False) -> State:
+    """Run a scene to its end time, writing its frames to the HDF5 file ``output``; returns the
+    final state. ``scene``: a scene file (TOML, changed by ``overrides``, "key=value" strings) or
+    a ``Scene`` (``load_scene``, ``Scene.of``). ``progress``: called with a line per frame
+    (simulated time, steps/s, step, GMRES iterations, ETA) and a summary line at the end (print
+    by default; None: silent). With ``resume``, ``output`` must be an earlier run: its stored
+    scene is used (a Scene built in Python must be given again, the same one), ``overrides``
+    may only extend it (RESUMABLE_KEYS), and stepping continues from its last frame complete in
+    every column; a finished run says so and returns its last state. An existing ``output`` is
+    replaced only with ``overwrite`` (nothing written is lost by mistake).
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> scene = wb.load_scene("scenes/settling_cell.toml", ["time.end=1e-3"])   # doctest: +SKIP
+    >>> final = wb.run(scene, "results/settling.h5", overwrite=True)           # doctest: +SKIP
+    """
+    output, report = Path(output), progress or (lambda line: None)
+    given, path = (scene, None) if isinstance(scene, Scene) else (None, scene)
+    if given is not None and overrides:
+        raise ValueError("overrides change a scene file as it is read; for a Scene, build it with the values wanted")
     if resume:
-        scene, state = _resumed(output, overrides)
+        scene, state = _resumed(output, overrides, given)
+        if state.time >= scene.end:
+            report(f"{output}: finished already (t = {state.time:g} s = time.end); nothing to run. To run it on,"
+                   f" resume with a later end (--set time.end=...)")
+            return state
     else:
         if output.exists() and not overwrite:
-            raise scenes.SceneError(f"{output} exists: --resume continues it, --overwrite replaces it")
-        scene = scenes.load(scene_path, overrides)
+            raise scenes.SceneError(f"{output} exists: --resume continues it, --overwrite replaces it (Python:"
+                                    " resume=True, overwrite=True)")
+        scene = given or scenes.load(path, overrides)
         state = scene.initial_state()
     sim = Simulator(scene.model, device)
-    writer = TableWriter(output, frame_columns(scene.model), scene.raw, device, title=f"warpbem run: {scene_path}",
+    source = path if given is None else "a Python script" if given.raw is None else f"a scene of {given.folder}"
+    writer = TableWriter(output, frame_columns(scene.model), scene.table(), device, title=f"warpbem run: {source}",
                          resume=resume)
     attrs = writer.file.attrs
     if resume:
-        attrs["scene"] = json.dumps(scene.raw, sort_keys=True)
+        attrs["scene"] = json.dumps(scene.table(), sort_keys=True)
         attrs["resumed"] = json.dumps(json.loads(attrs.get("resumed", "[]")) + [
             {"time": state.time, "overrides": list(overrides), "at": datetime.now(timezone.utc).isoformat()}])
     else:
-        attrs["scene_folder"] = str(Path(scene_path).resolve().parent)
+        attrs["scene_folder"] = "" if scene.folder is None else str(Path(scene.folder).resolve())
         attrs["body_names"] = json.dumps(list(scene.model.names))
         attrs["near_far_split"] = sim.near_far_split
         bonds = scene.model.interaction("bond")
@@ -99,8 +141,11 @@ def run(scene_path, output, overrides=(), device="cpu", resume=False, progress=p
                 writer.append(**frame.columns())
                 elapsed = time.perf_counter() - start
                 rate = (state.time - t0) / elapsed
-                eta = (scene.end - state.time) / rate if rate > 0 else float("inf")
-                progress(f"t = {state.time:.6g} / {scene.end:g} s  steps {state.steps}  {steps / elapsed:.2f} steps/s"
-                         f"  dt {frame.dt:.2e} s  GMRES {frame.gmres_iterations} ({sim.mobility.operator_description})"
-                         f"  snapshots {sim.hydro.snapshots_solved}  ETA {eta:.0f} s")
+                eta = eta_text((scene.end - state.time) / rate) if rate > 0 else "ETA -"
+                report(f"t = {state.time:.6g} / {scene.end:g} s  steps {state.steps}  {steps / elapsed:.2f} steps/s"
+                       f"  dt {frame.dt:.2e} s  GMRES {frame.gmres_iterations} ({sim.mobility.operator_description})"
+                       f"  snapshots {sim.hydro.snapshots_solved}  {eta}")
+        frames = writer.rows
+    report(f"done: {steps} steps, t = {t0:g} -> {state.time:g} s simulated in {time.perf_counter() - start:.1f} s;"
+           f" {frames} frames in {output}")
     return state

@@ -16,10 +16,15 @@ from __future__ import annotations
 
 import ast
 import copy
+import dataclasses
+import hashlib
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
+from .. import units
 from ..dynamics.integrate import DEFAULT_SCHEME, SCHEMES
 from ..dynamics.model import Flow, Model, SolverOptions, StepPolicy
 from ..dynamics.state import State
@@ -28,16 +33,15 @@ from ..forces.adhesion import Adhesion
 from ..forces.bond_model import BondOptions
 from ..forces.external import FLUID_DENSITY, STANDARD_GRAVITY, ExternalLoads, Gravity
 from ..forces.repulsion import Repulsion
-from ..options import OptionError, check_keys, declared, from_table, option, validate
+from ..options import (OptionError, check_keys, check_plausible, declared, from_table, option, plausible_magnitudes,
+                       validate)
 from ..surfaces import mesh as meshes
 from ..surfaces.body import Body
 from ..surfaces.gaps import WALL, Contacts, GapFinder
-from ..surfaces.placement import PlacementError, check_placement
+from ..surfaces.placement import PlacementError, body_label, check_placement
 
 
 MESH_SHAPES = ("sphere", "spheroid", "file")
-BOUND_TOLERANCE = 1e-9  # relative: a range's boundary given in a scene file is inside it
-ADHESION_REUSE_TOLERANCE = 2e-9  # m: chosen from benchmarks/adhesion.py (docs/adhesion.md)
 
 class SceneError(ValueError):
     """A scene that cannot run; the message names the field."""
@@ -103,7 +107,7 @@ class MeshOptions:
 
     shape: str = option("sphere", "the mesh: a cube-sphere, a spheroid (axis z) or a file", choices=MESH_SHAPES)
     radius: float | None = option(None, "radius (sphere; spheroid: equatorial). Required for a sphere or spheroid",
-                                  "m", kind=float, low=0.0, high=1e-2, low_open=True)
+                                  "m", kind=float, low=0.0, low_open=True, plausible=units.PLAUSIBLE_SIZE)
     subdivisions: int = option(4, "k: 6 k^2 QUAD9 elements (k = 4: 96)", low=1, high=32)
     aspect_ratio: float | None = option(None, "spheroid's polar over equatorial radius (<1 oblate). Required for a"
                                         " spheroid", kind=float, low=0.05, high=20.0)
@@ -121,15 +125,16 @@ class BodySpec:
     from its [bodies.mesh] table."""
 
     position: tuple | None = option(None, "reference point (the mesh's origin). Required", "m", kind=float,
-                                    length=3)
+                                    length=3, plausible=units.PLAUSIBLE_POSITION)
     name: str | None = option(None, "name in outputs. Default: body<index> (arrays: '<name> i j')", kind=str)
     orientation: tuple = option((1.0, 0.0, 0.0, 0.0), "unit quaternion (w, x, y, z) of the body frame",
                                 kind=float, length=4)
     fixed: bool = option(False, "held at rest (an adherent cell): its holding load is an output")
     density: float = option(FLUID_DENSITY, "density (gravity)", "kg/m^3", low=100.0, high=1e5)
-    force: tuple = option((0.0, 0.0, 0.0), "external force on a free body", "N", kind=float, length=3)
+    force: tuple = option((0.0, 0.0, 0.0), "external force on a free body", "N", kind=float, length=3,
+                          plausible=units.PLAUSIBLE_FORCE)
     torque: tuple = option((0.0, 0.0, 0.0), "external torque on a free body, about its reference point", "N m",
-                           kind=float, length=3)
+                           kind=float, length=3, plausible=units.PLAUSIBLE_TORQUE)
     adhesive: bool = option(True, "a free body forms bonds (with physics.adhesion)")
     shear_modulus: float | None = option(None, "shear modulus G: the Hertz patch, and the deformation of a"
                                          " deformable body. Default: rigid", "Pa", kind=float, low=0.0, high=1e12,
@@ -159,8 +164,10 @@ class ArrayOptions:
     0), with any [[bodies]] key but position."""
 
     count: tuple | None = option(None, "bodies along x and y. Required", kind=int, length=2, low=1, high=4096)
-    pitch: tuple | None = option(None, "spacing along x and y. Required", "m", kind=float, length=2)
-    origin: tuple | None = option(None, "position of body (0, 0). Required", "m", kind=float, length=3)
+    pitch: tuple | None = option(None, "spacing along x and y. Required", "m", kind=float, length=2,
+                                 plausible=units.PLAUSIBLE_POSITION)
+    origin: tuple | None = option(None, "position of body (0, 0). Required", "m", kind=float, length=3,
+                                  plausible=units.PLAUSIBLE_POSITION)
 
     def __post_init__(self):
         validate(self)
@@ -168,20 +175,69 @@ class ArrayOptions:
 
 @dataclass(frozen=True)
 class Scene:
-    """A validated scene: the ``model`` it describes, the start placement of its ``bodies``, the
-    run settings (end time, frames every ``frame_every`` steps or every ``frame_interval``
-    seconds) and its sweep axes; ``raw`` keeps the checked table for the output file."""
+    """What a run needs: the ``model``, the start placement of its ``bodies`` (each with its
+    ``mesh``, ``position``, ``orientation`` and ``fixed`` flag), the run settings (end time,
+    frames every ``frame_every`` steps or every ``frame_interval`` seconds) and the sweep axes.
+    Read from a scene file by ``load_scene``, or built in a script by ``Scene.of``; either way
+    ``warpbem.run`` runs it. ``raw``: the scene table it was read from (None when built in
+    Python); ``table()`` is what the run file stores."""
 
-    raw: dict
-    bodies: tuple  # BodySpec per body
+    raw: dict | None
+    bodies: tuple  # BodySpec per body (a scene file) or Body (Scene.of)
     model: Model
     end: float
     frame_every: int | None
     frame_interval: float | None
     sweep: dict  # {axis: {label: [key=value overrides]}}, the cases ``warpbem sweep`` runs
+    folder: Path | None = None  # a scene file's folder: its mesh files' paths are relative to it
+
+    @classmethod
+    def of(cls, model: Model, positions, orientations=None, *, end: float, frame_every: int | None = None,
+           frame_interval: float | None = None) -> "Scene":
+        """The scene of a ``model`` built in Python, its bodies starting at ``positions`` ((n, 3),
+        m) with ``orientations`` ((n, 4) unit quaternions w, x, y, z; default: identity), run to
+        ``end`` (s) with a frame every ``frame_every`` steps (default 1) or every
+        ``frame_interval`` s. Checked as a scene file is: the run settings' ranges, the bodies'
+        placement (no overlap, above the wall) and, with repulsion, their roughness layers apart.
+
+        Examples
+        --------
+        >>> import warpbem as wb
+        >>> cell = wb.mesh.sphere(radius=5e-6, subdivisions=2)
+        >>> model = wb.Model([cell], [False], wb.Flow(shear_rate=0.0), interactions=[wb.Gravity([1070.0])])
+        >>> scene = wb.Scene.of(model, [[0.0, 0.0, 7e-6]], end=1e-3, frame_interval=5e-4)
+        >>> scene.end, len(scene.bodies)
+        (0.001, 1)
+        """
+        positions = np.asarray(positions, dtype=float)
+        if positions.shape != (model.n_bodies, 3):
+            raise ValueError(f"positions: expected ({model.n_bodies}, 3) (one per body of the model, m), got"
+                             f" {positions.shape}")
+        orientations = (np.tile([1.0, 0.0, 0.0, 0.0], (model.n_bodies, 1)) if orientations is None
+                        else np.asarray(orientations, dtype=float))
+        run = RunSettings(end=end, scheme=model.scheme, frame_every=frame_every, frame_interval=frame_interval)
+        bodies = tuple(Body(m, position=tuple(p), orientation=tuple(q), fixed=f)
+                       for m, p, q, f in zip(model.meshes, positions, orientations, model.fixed))
+        scene = cls(raw=None, bodies=bodies, model=model, end=run.end, frame_every=run.frame_every,
+                    frame_interval=run.frame_interval, sweep={})
+        try:
+            return _checked(scene)
+        except SceneError as err:
+            raise PlacementError(str(err)) from err
+
+    def table(self) -> dict:
+        """What a run file stores of this scene (its ``scene`` attribute): the scene table it was
+        read from, or for a scene built in Python its model, placement and run settings as plain
+        values (each mesh by its size and a digest of its nodes and elements)."""
+        if self.raw is not None:
+            return self.raw
+        return {"built_in": "python (warpbem.Scene.of)", "model": plain(self.model),
+                "bodies": [{"position": list(b.position), "orientation": list(b.orientation)} for b in self.bodies],
+                "time": {"end": self.end, "frame_every": self.frame_every, "frame_interval": self.frame_interval}}
 
     def initial_bodies(self) -> list[Body]:
-        return [Body(b.mesh, position=b.position, orientation=b.orientation, fixed=b.fixed) for b in self.bodies]
+        return [Body(b.mesh, position=b.position, orientation=b.orientation, fixed=b.fixed, name=b.name)
+                for b in self.bodies]
 
     def initial_state(self) -> State:
         return self.model.initial_state([b.position for b in self.bodies], [b.orientation for b in self.bodies])
@@ -218,9 +274,14 @@ def _mesh(where, spec, folder: Path):
     if options.shape == "spheroid":
         return meshes.spheroid(options.radius, options.aspect_ratio, options.subdivisions)
     try:
-        return meshes.load(folder / options.path)
+        loaded = meshes.load(folder / options.path)
     except meshes.MeshError as err:
         raise SceneError(f"{where}.path: {err}") from err
+    try:  # a mesh file in micrometres
+        check_plausible(f"{where}.path", loaded.size(), "m", units.PLAUSIBLE_SIZE, "its size ")
+    except OptionError as err:
+        raise SceneError(str(err)) from err
+    return loaded
 
 
 POLICY_KEYS = {name for name, _, _ in declared(StepPolicy)}
@@ -228,8 +289,18 @@ TIME_KEYS = POLICY_KEYS | {name for name, _, _ in declared(RunSettings)}  # the 
 
 
 def parse(table: dict, folder: Path = Path(".")) -> Scene:
-    """Validate a scene table (as read from TOML) and build the Scene."""
-    _table("scene", table, {"flow", "physics", "repulsion", "adhesion", "deformation", "time", "solver",
+    """Validate a scene table (as read from TOML) and build the Scene; lengths, forces, the shear
+    rate and the viscosity within their plausible magnitudes (``warpbem.units``: a value typed
+    in another unit), unless the scene says ``any_scale = true``."""
+    any_scale = table.get("any_scale", False) if isinstance(table, dict) else False
+    if not isinstance(any_scale, bool):
+        raise SceneError(f"any_scale: expected true or false, got {any_scale!r}")
+    with plausible_magnitudes(not any_scale):
+        return _parse(table, folder)
+
+
+def _parse(table: dict, folder: Path) -> Scene:
+    _table("scene", table, {"any_scale", "flow", "physics", "repulsion", "adhesion", "deformation", "time", "solver",
                            "bodies", "arrays", "sweep"},
            ("flow", "time"))
     sweep = _sweep_axes(table.get("sweep", {}))
@@ -261,22 +332,25 @@ def parse(table: dict, folder: Path = Path(".")) -> Scene:
     if physics.repulsion:
         interactions.append(repulsion)
     if physics.adhesion:
-        interactions.append(_adhesion(adhesion, bodies, repulsion, policy.dt_min, flow.wall))
-    # bonds: mobility snapshots reused across steps unless the scene says otherwise (SolverOptions)
-    solver_options = _options(SolverOptions, {"reuse_tolerance": ADHESION_REUSE_TOLERANCE, **solver}
-                              if physics.adhesion else solver, "solver").resolved(time_stepping=True)
+        interactions.append(_adhesion(adhesion, bodies, flow.wall))
+    solver_options = _options(SolverOptions, solver, "solver")  # its context defaults: the Model's
     if any(b.deformable for b in bodies):
         interactions.append(Deformation([b.deformable for b in bodies], [b.shear_modulus for b in bodies],
                                         [b.poisson_ratio for b in bodies], deformation))
     try:
         model = Model(meshes=[b.mesh for b in bodies], fixed=[b.fixed for b in bodies], names=[b.name for b in bodies],
                       interactions=interactions, flow=flow, solver=solver_options, policy=policy, scheme=run.scheme)
-    except ValueError as err:  # an interaction that does not fit the bodies (Interaction.check)
-        raise SceneError(f"bodies: {err}") from err
+    except ValueError as err:  # an interaction that does not fit the bodies or the step (Interaction.check)
+        field = str(err).split(":", 1)[0]
+        raise SceneError(f"{MODEL_FIELDS[field]}: {str(err).split(':', 1)[1].strip()}" if field in MODEL_FIELDS
+                         else f"bodies: {err}") from err
     return Scene(raw=copy.deepcopy(table), bodies=tuple(bodies), model=model, end=run.end,
-                 frame_every=run.frame_every, frame_interval=run.frame_interval, sweep=sweep)
+                 frame_every=run.frame_every, frame_interval=run.frame_interval, sweep=sweep, folder=folder)
 
 
+# the fields the Model's own checks name (its context defaults, Interaction.check), as a scene names them
+MODEL_FIELDS = {**{name: f"solver.{name}" for name, _, _ in declared(SolverOptions)},
+                **{name: f"time.{name}" for name in POLICY_KEYS}}
 BODY_KEYS = {name for name, _, _ in declared(BodySpec)} | {"mesh"}
 ARRAY_KEYS = {name for name, _, _ in declared(ArrayOptions)}
 
@@ -310,25 +384,16 @@ def _array(where, spec, folder) -> list:
             for i in range(nx) for j in range(ny)]
 
 
-def _adhesion(table, bodies, repulsion: Repulsion, dt_min: float, wall: bool) -> Adhesion:
-    """The [adhesion] table and the bodies' keys as an Adhesion, checked by field name."""
+def _adhesion(table, bodies, wall: bool) -> Adhesion:
+    """The [adhesion] table and the bodies' keys as an Adhesion, checked by field name (its layers
+    and the step's bound by the kinetics: the Model's, ``context_defaults`` and ``Adhesion.check``)."""
     if not wall:
         raise SceneError("physics.adhesion: bonds form with ligands on the wall; it needs flow.wall = true")
     if not any(b.adhesive and not b.fixed for b in bodies):
         raise SceneError("bodies: adhesion is on but no free body is adhesive (bodies.N.adhesive)")
-    options = _options(BondOptions, table, "adhesion").resolved(repulsion.cell_roughness, repulsion.wall_roughness)
-    adhesion = Adhesion(options, adhesive=[b.adhesive for b in bodies], shear_modulus=[b.shear_modulus for b in bodies],
-                        poisson_ratio=[b.poisson_ratio for b in bodies], ligand_bodies=[b.ligands for b in bodies])
-    # the step is bounded by the kinetics, k dt <= kinetics_fraction; dt_min must allow it. The
-    # bound is compared, and printed, to 1e-9 of itself, so that a dt_min written as the bound
-    # (on_rate = 1e5 /s, dt_min = 1e-6 s) is not refused by the round-off of kinetics_fraction / rate
-    for name, rate in (("on_rate", adhesion.fastest_formation), ("off_rate", adhesion.off_rate)):
-        longest = adhesion.kinetics_fraction / rate if rate > 0 else float("inf")
-        if dt_min > longest * (1 + BOUND_TOLERANCE):
-            raise SceneError(f"time.dt_min: {dt_min:.10g} s is too long for the bond kinetics ({name}: k dt ="
-                             f" {rate * dt_min:.10g} > kinetics_fraction {adhesion.kinetics_fraction:g}); the"
-                             f" allowed range is dt_min <= {longest:.10g} s")
-    return adhesion
+    return Adhesion(_options(BondOptions, table, "adhesion"), adhesive=[b.adhesive for b in bodies],
+                    shear_modulus=[b.shear_modulus for b in bodies], poisson_ratio=[b.poisson_ratio for b in bodies],
+                    ligand_bodies=[b.ligands for b in bodies])
 
 
 def _sweep_axes(table) -> dict:
@@ -383,13 +448,36 @@ def load(path, overrides=()) -> Scene:
         raise SceneError(f"{path}: not valid TOML ({err})") from err
     scene = parse(apply_overrides(table, overrides), path.parent)
     try:
-        check_placement(scene.initial_bodies(), scene.model.flow.wall)
+        return _checked(scene)
     except PlacementError as err:
         raise SceneError(f"{path}: initial placement: {err}") from err
+
+
+def _checked(scene: Scene) -> Scene:
+    """``scene``, once its bodies are checked not to overlap (PlacementError) and, with repulsion
+    on, not to start with their roughness layers in contact (SceneError)."""
+    check_placement(scene.initial_bodies(), scene.model.flow.wall)
     repulsion = scene.model.interaction(Repulsion.name)
     if repulsion is not None:
         _check_roughness(scene, repulsion)
     return scene
+
+
+def plain(value):
+    """A configuration as JSON-ready values: dataclasses as {"type": name, field: value}, meshes by
+    their size and a digest of their nodes and elements, arrays and tuples as lists."""
+    if isinstance(value, meshes.Mesh):
+        digest = hashlib.sha256(np.ascontiguousarray(value.nodes).tobytes()
+                                + np.ascontiguousarray(value.elements).tobytes()).hexdigest()
+        return {"elements": len(value.elements), "sha256": digest}
+    if dataclasses.is_dataclass(value):
+        return {"type": type(value).__name__,
+                **{f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [plain(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
 
 
 def _check_roughness(scene: Scene, rep: Repulsion):
@@ -399,7 +487,15 @@ def _check_roughness(scene: Scene, rep: Repulsion):
     layers = rep.cell_roughness + max(rep.cell_roughness, rep.wall_roughness)  # the thickest pair
     for gap in contacts.within(2.0 * layers):
         if rep.separation(gap.distance, gap.other == WALL) <= 0:
-            other = "the wall" if gap.other == WALL else f"bodies.{gap.other}"
+            other = "the wall" if gap.other == WALL else f"bodies.{gap.other}{_named(scene, gap.other)}"
             needed = rep.cell_roughness + (rep.wall_roughness if gap.other == WALL else rep.cell_roughness)
-            raise SceneError(f"bodies.{gap.body}.position: its roughness layer touches that of {other} (gap"
-                             f" {gap.distance:.4g} m; with repulsion on the gap must exceed {needed:.4g} m)")
+            raise SceneError(f"bodies.{gap.body}.position{_named(scene, gap.body)}: its roughness layer touches that"
+                             f" of {other} (gap {gap.distance:.4g} m; with repulsion on the gap must exceed"
+                             f" {needed:.4g} m)")
+
+
+def _named(scene: Scene, i: int) -> str:
+    """Body ``i``'s own name for a message beside its scene key (" ('free cell')"); nothing for
+    the default name."""
+    name = scene.bodies[i].name
+    return f" ({name!r})" if body_label(name, i) == repr(name) else ""

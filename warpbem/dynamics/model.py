@@ -12,7 +12,9 @@ from functools import cached_property
 
 import numpy as np
 
+from ..forces.adhesion import Adhesion
 from ..forces.interaction import BoundInteraction, Interaction
+from ..forces.repulsion import Repulsion
 from ..hydro.frozen import FrozenArraySolver
 from ..hydro.mobility import MobilitySolver
 from ..hydro.options import TIME_STEPPING_DENSITY_ORDER, Flow, SolverOptions
@@ -36,6 +38,18 @@ def build_solver(options: SolverOptions, flow: Flow, device, fixed_cells: int = 
         return FrozenArraySolver(MobilitySolver(flow.shear_rate, flow.viscosity, flow.wall, device, options),
                                  options.near_far_cutoff)
     return MobilitySolver(flow.shear_rate, flow.viscosity, flow.wall, device, options, unknowns=unknowns)
+
+
+def context_defaults(interactions: tuple, solver: SolverOptions) -> tuple[tuple, SolverOptions]:
+    """Every default that depends on what else a model switches on, resolved in this one place
+    (a scene file and a script building the same model get the same settings): the solver's
+    time-stepping defaults and, with bonds, its snapshot lattice (``SolverOptions.resolved``);
+    the bonds' layers from the model's repulsion roughness (``Adhesion.repulsion``)."""
+    repulsion = next((x for x in interactions if isinstance(x, Repulsion)), None)
+    bonds = any(isinstance(x, Adhesion) for x in interactions)
+    if repulsion is not None:
+        interactions = tuple(replace(x, repulsion=repulsion) if isinstance(x, Adhesion) else x for x in interactions)
+    return interactions, solver.resolved(time_stepping=True, bonds=bonds)
 
 
 DT_MIN = 1e-5  # s: the shortest step by default (thesis ch. 3.3: 1e-4 to 1e-5 s), or dt_max if shorter
@@ -110,8 +124,9 @@ class Model:
         seen = [x.name for x in interactions]
         if len(set(seen)) != len(seen):
             raise ValueError(f"interaction names must be unique, got {seen}")
+        interactions, solver = context_defaults(interactions, self.solver)
         for name, value in (("meshes", meshes), ("fixed", fixed), ("names", names), ("interactions", interactions),
-                            ("solver", self.solver.resolved(time_stepping=True))):
+                            ("solver", solver)):
             object.__setattr__(self, name, value)
         for x in interactions:  # e.g. one density per body, ligands on fixed bodies only
             x.check(self)
@@ -163,8 +178,8 @@ class Model:
             if x.shapes_bodies and x.name in state.parts:
                 meshes = x.body_meshes(state.parts[x.name], meshes, contact)
                 slip = x.surface_velocities(state.parts[x.name], slip)
-        bodies = [Body(m, position=p, orientation=q, fixed=f)
-                  for m, p, q, f in zip(meshes, state.positions, state.orientations, self.fixed)]
+        bodies = [Body(m, position=p, orientation=q, fixed=f, name=n)
+                  for m, p, q, f, n in zip(meshes, state.positions, state.orientations, self.fixed, self.names)]
         return [b if v is None else replace(b, surface_velocity=v @ b.rotation().T) for b, v in zip(bodies, slip)]
 
     @property

@@ -21,6 +21,7 @@ from .interaction import BoundInteraction, ImplicitCoordinates, Interaction
 from .repulsion import Repulsion
 
 APPROACH_MARGIN = 100e-9  # m: a cell approaches the wall far less than this in one step
+KINETICS_BOUND_TOLERANCE = 1e-9  # relative: a dt_min given as the kinetics' bound is inside it
 
 
 @dataclass(frozen=True)
@@ -30,7 +31,9 @@ class Adhesion(BondLaws, Interaction):
     layers not given: the default repulsion's roughness); per body of the model
     ``shear_modulus`` (Pa, None or 0: rigid, no contact patch) and ``poisson_ratio``;
     ``adhesive`` (default: every free body). The parameters are also attributes of the same
-    names. The receptors are sampled on the model's meshes when it is bound (``BoundAdhesion``)."""
+    names, with the layers ``options`` leaves out taken from ``repulsion``'s roughness (a
+    ``Model`` sets it to its own ``Repulsion``; default: the repulsion's defaults). The receptors
+    are sampled on the model's meshes when it is bound (``BoundAdhesion``)."""
 
     name = "bond"
     implicit = True
@@ -41,14 +44,15 @@ class Adhesion(BondLaws, Interaction):
     poisson_ratio: tuple | None = None
     adhesive: tuple | None = None
     ligand_bodies: tuple | None = None
+    repulsion: Repulsion = Repulsion()
 
     def __post_init__(self):
-        object.__setattr__(self, "options", self.options.resolved(Repulsion.cell_roughness, Repulsion.wall_roughness))
         for name in ("shear_modulus", "poisson_ratio", "adhesive", "ligand_bodies"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, tuple(getattr(self, name)))
+        resolved = self.options.resolved(self.repulsion.cell_roughness, self.repulsion.wall_roughness)
         for name, _, _ in declared(BondOptions):  # read as attributes throughout the bond model
-            object.__setattr__(self, name, getattr(self.options, name))
+            object.__setattr__(self, name, getattr(resolved, name))
 
     def per_body(self, model):
         """(the adhesive free bodies, the ligand-bearing fixed bodies (indices, in body order),
@@ -75,7 +79,20 @@ class Adhesion(BondLaws, Interaction):
         return cells, np.flatnonzero(carriers), modulus, ratio
 
     def check(self, model):
+        """The bodies fit (``per_body``), and the step allows the kinetics: k dt <=
+        kinetics_fraction must hold at the shortest step, ``model.policy.dt_min``. The bound is
+        compared, and printed, to 1e-9 of itself, so that a dt_min written as the bound (on_rate
+        = 1e5 /s, dt_min = 1e-6 s) is not refused by the round-off of kinetics_fraction / rate."""
         self.per_body(model)
+        if not model.flow.wall:
+            raise ValueError("adhesion: bonds form with ligands on the wall; it needs Flow(wall=True)")
+        dt_min = model.policy.dt_min
+        for name, rate in (("on_rate", self.fastest_formation), ("off_rate", self.off_rate)):
+            longest = self.kinetics_fraction / rate if rate > 0 else float("inf")
+            if dt_min > longest * (1 + KINETICS_BOUND_TOLERANCE):
+                raise ValueError(f"dt_min: {dt_min:.10g} s is too long for the bond kinetics ({name}: k dt ="
+                                 f" {rate * dt_min:.10g} > kinetics_fraction {self.kinetics_fraction:g}); the"
+                                 f" allowed range is dt_min <= {longest:.10g} s")
 
     def bound(self, model, device=None) -> "BoundAdhesion":
         return BoundAdhesion(self, model, device)
@@ -90,7 +107,7 @@ class BoundAdhesion(BondLaws, BoundInteraction):
     def __init__(self, interaction: Adhesion, model, device=None):
         super().__init__(interaction, model, None if device is None else runtime.resolve_device(device))
         for name, _, _ in declared(BondOptions):
-            setattr(self, name, getattr(interaction.options, name))
+            setattr(self, name, getattr(interaction, name))
         self.cells, self.ligand_bodies, self.shear_modulus, self.poisson_ratio = interaction.per_body(model)
         meshes = model.meshes
         self.radius = np.array([m.equivalent_radius() for m in meshes])

@@ -5,7 +5,9 @@ near-far settings from the same object; scenes read both from ``[flow]`` and ``[
 
 Defaults that depend on the context are ``None`` and resolved by ``SolverOptions.resolved``:
 the density order (2 for a solve, 1 for a time-stepped model: why in its doc), the contact
-refinement by the density order, the GMRES tolerance by the precision.
+refinement by the density order, the GMRES tolerance by the precision, the snapshot lattice by
+whether the model has bonds. A ``Model`` resolves them once, so that a scene file and a script
+that build the same bodies and interactions get the same settings.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+from .. import units
 from ..options import OptionError, option, validate
 from .treecode import TreecodeOptions
 
@@ -59,6 +62,10 @@ DEFAULT_PAIR_CUTOFF = 1e-3
 # less from 5 x 5 (2.26 against 3.40 s) in each of three runs; below, it would add its error
 # (1e-4 at the 40 um cut-off) for no gain
 NEAR_FAR_FIXED_CELLS = 25
+# m: the snapshot lattice of a model with bonds when none is given (SolverOptions.reuse_tolerance):
+# the bonds' stiff springs are taken implicitly with the cell's mobility, which then need not be
+# solved again for each sub-nanometre move (benchmarks/adhesion.py, docs/adhesion.md)
+BONDS_REUSE_TOLERANCE = 2e-9
 # the density order of a solve, and of a time-stepped model (SolverOptions.density_order)
 SOLVE_DENSITY_ORDER = 2
 TIME_STEPPING_DENSITY_ORDER = 1
@@ -69,9 +76,9 @@ class Flow:
     """Undisturbed flow u = shear_rate z e_x above the no-slip wall z = 0 (if ``wall``)."""
 
     shear_rate: float = option(0.0, "shear rate of the undisturbed flow u = shear_rate z e_x", "1/s",
-                               low=-1e6, high=1e6)
+                               low=-1e6, high=1e6, plausible=units.PLAUSIBLE_SHEAR_RATE)
     viscosity: float = option(1.2e-3, "fluid viscosity (plasma, thesis ch. 3-5: 1.2e-3)", "Pa s",
-                              low=0.0, high=1e3, low_open=True)
+                              low=0.0, high=1e3, low_open=True, plausible=units.PLAUSIBLE_VISCOSITY)
     wall: bool = option(True, "a no-slip plane wall at z = 0 (Blake images; false: unbounded fluid)")
 
     def __post_init__(self):
@@ -113,10 +120,11 @@ class SolverOptions:
                            " or auto (dense while one matrix takes at most a quarter of the device's memory)",
                            choices=OPERATOR_MODES)
     precondition: bool = option(True, "block-Jacobi preconditioner (each body's own block, LU)")
-    reuse_tolerance: float = option(0.0, "mobility snapshots reused across time steps on a lattice of this"
-                                    " spacing in height (dynamics/hydrodynamics.py); 0 solves every state."
-                                    " Scenes with adhesion default to 2e-9 (benchmarks/adhesion.py)", "m",
-                                    low=0.0, high=1e-6)
+    reuse_tolerance: float | None = option(None, "mobility snapshots reused across time steps on a lattice of this"
+                                           " spacing in height (dynamics/hydrodynamics.py); 0 solves every state."
+                                           f" Default: {BONDS_REUSE_TOLERANCE:g} in a model with bonds"
+                                           " (benchmarks/adhesion.py), 0 otherwise", "m", kind=float,
+                                           low=0.0, high=1e-6)
     reuse_lateral: float | None = option(None, "lateral lattice of the several-body snapshots. Default: 50 x"
                                          " reuse_tolerance", "m", kind=float, low=0.0, high=1e-5, low_open=True)
     reuse_interaction: float | None = option(None, "height lattice of the several-body snapshots, >= reuse_tolerance."
@@ -163,20 +171,28 @@ class SolverOptions:
             raise OptionError("contact_refinement: the accuracy target chooses it; give one or the other")
         if self.accuracy is not None and self.density_order == 3:
             raise OptionError("density_order: the accuracy target's error model holds densities 1 and 2, not 3")
-        if self.reuse_interaction is not None and not self.reuse_interaction >= self.reuse_tolerance > 0:
-            raise OptionError(f"reuse_interaction: {self.reuse_interaction:g} is outside the allowed range"
-                              f" [{max(self.reuse_tolerance, 1e-12):g}, 1e-06] (>= reuse_tolerance > 0)")
+        if self.reuse_tolerance is not None:  # else checked once the context gives it (resolved)
+            self._check_reuse_interaction(self.reuse_tolerance)
 
-    def resolved(self, time_stepping: bool = False) -> "SolverOptions":
-        """These options with the context defaults filled in (module docstring); with an accuracy
-        target the density order and refinement stay open for it (``accuracy.py``)."""
+    def _check_reuse_interaction(self, tolerance: float):
+        if self.reuse_interaction is not None and not self.reuse_interaction >= tolerance > 0:
+            raise OptionError(f"reuse_interaction: {self.reuse_interaction:g} is outside the allowed range"
+                              f" [{max(tolerance, 1e-12):g}, 1e-06] (>= reuse_tolerance > 0)")
+
+    def resolved(self, time_stepping: bool = False, bonds: bool = False) -> "SolverOptions":
+        """These options with the context defaults filled in (module docstring): ``time_stepping``,
+        a time-stepped model's; ``bonds``, a model with bonds (the snapshot lattice). With an
+        accuracy target the density order and refinement stay open for it (``accuracy.py``). A
+        ``Model`` resolves its options with this once, for scenes and scripts alike."""
+        tolerance = DEFAULT_TOLERANCE[self.dtype] if self.tolerance is None else self.tolerance
+        reuse = (BONDS_REUSE_TOLERANCE if bonds else 0.0) if self.reuse_tolerance is None else self.reuse_tolerance
+        self._check_reuse_interaction(reuse)
         if self.accuracy is not None:
-            tolerance = DEFAULT_TOLERANCE[self.dtype] if self.tolerance is None else self.tolerance
-            return dataclasses.replace(self, tolerance=tolerance)
+            return dataclasses.replace(self, tolerance=tolerance, reuse_tolerance=reuse)
         order = self.density_order or (TIME_STEPPING_DENSITY_ORDER if time_stepping else SOLVE_DENSITY_ORDER)
         refinement = DEFAULT_CONTACT_REFINEMENT[order] if self.contact_refinement is None else self.contact_refinement
-        tolerance = DEFAULT_TOLERANCE[self.dtype] if self.tolerance is None else self.tolerance
-        return dataclasses.replace(self, density_order=order, contact_refinement=refinement, tolerance=tolerance)
+        return dataclasses.replace(self, density_order=order, contact_refinement=refinement, tolerance=tolerance,
+                                   reuse_tolerance=reuse)
 
     def without_accuracy(self) -> "SolverOptions":
         """These options with no accuracy target, for the solves it does not cover (the traction,
