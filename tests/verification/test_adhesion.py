@@ -261,14 +261,16 @@ def test_a_free_cell_binds_to_ligands_on_an_adherent_cell():
 
 @pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
 @pytest.mark.parametrize("changes, end, state", [(dict(off_rate=0.0), 0.03, "firm adhesion"),
-                                                 (dict(off_rate=50.0), 0.03, "rolling"),
+                                                 (dict(off_rate=50.0), 0.06, "rolling"),
                                                  (dict(on_rate=0.0), 0.01, "no adhesion")])
 def test_the_state_classifier_on_short_real_runs(changes, end, state):
     """The rule of warpbem/app/adhesion_states.py (Chang, Tees & Hammer 2000: the mean velocity
     over the last half against the free one) on real runs of the 2 um cell in 100 1/s shear,
     Table 4.1's soft bonds: bonds that never break (k_r0 = 0) hold it, firm adhesion; k_r0 =
-    50 /s lets it roll (V / V_free 0.24 here: bonds break as fast as they form at the rear); no
-    on-rate leaves it free, no adhesion (V / V_free 1)."""
+    50 /s over 60 ms lets it roll (bonds break as fast as they form at the rear: V / V_free
+    0.081 here, 0.065, 0.056 and 0.043 with seeds 1-3, all at least twice inside the band
+    0.02-0.25 asked below; over 30 ms it was 0.24); no on-rate leaves it free: no bond ever,
+    and it moves at its free velocity (V / V_free 0.9988: the slow settling under gravity)."""
     from warpbem.app.adhesion_states import FIRM, FREE, classify
 
     model = rolling_model(**changes)
@@ -285,3 +287,5 @@ def test_the_state_classifier_on_short_real_runs(changes, end, state):
     assert found == state
     if state == "rolling":
         assert 2 * FIRM < ratio < FREE / 2  # well inside the band, not at a boundary
+    if state == "no adhesion":
+        assert max(bonds) == 0 and ratio == pytest.approx(1.0, abs=5e-3)
