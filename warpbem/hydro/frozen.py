@@ -44,6 +44,7 @@ import warnings
 import numpy as np
 
 from ..surfaces.gaps import candidate_pairs, outer_radius
+from ..surfaces.placement import body_label
 from ..surfaces.quad9 import CENTRE_NODE
 from .completed_double_layer import all_completion_poles
 from .mobility import MobilitySolution, MobilitySolver, checked_bodies, checked_loads
@@ -225,8 +226,8 @@ class FrozenArraySolver:
         for i in adherent:
             b = bodies[i]
             if np.any(b.velocity) or np.any(b.angular_velocity) or b.surface_velocity is not None:
-                raise ValueError(f"body {i} is fixed but moves (a prescribed velocity or surface velocity): the"
-                                 " near-far split needs adherent cells at rest; solve without it")
+                raise ValueError(f"body {body_label(b.name, i)} is fixed but moves (a prescribed velocity or surface"
+                                 " velocity): the near-far split needs adherent cells at rest; solve without it")
         radius = max(outer_radius(b.mesh) for b in bodies)
         centres = np.array([b.position for b in bodies])
         low, high = centres.min(axis=0), centres.max(axis=0)

@@ -17,8 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import runtime
 from ..surfaces.body import Body
-from ..surfaces.placement import check_placement
+from ..surfaces.placement import body_label, check_placement
 from ..surfaces.gaps import WALL
 from . import accuracy
 from .block_factors import BlockFactors
@@ -115,6 +116,7 @@ class MobilitySolver:
                  options: SolverOptions | None = None, *, keep_systems: bool = True, unknowns: int | None = None):
         self.flow = Flow(shear_rate, viscosity, wall)
         self.device = device
+        runtime.resolve_device(device)  # a device this machine lacks: DeviceError before any work
         self.options = (options or SolverOptions()).resolved()
         self.quadrature = QuadratureOptions(order=self.options.quadrature_order,
                                             adaptive=self.options.adaptive_quadrature,
@@ -257,7 +259,7 @@ class MobilitySolver:
         geometry = SurfaceGeometry.from_bodies(bodies, options.quadrature_order, length, self.flow.wall,
                                                options.contact_refinement, options.refine_fixed_at_wall,
                                                options.density_order)
-        self._warn_unresolved(geometry, length)
+        self._warn_unresolved(geometry, length, bodies)
         description = BoundaryOperator(geometry, self.flow.wall, self.quadrature, "double_layer", options.dtype)
         if self._mode is None:  # "auto" of a solver built without its unknowns: decided once, here
             self._mode = choose_mode(description.size, options.dtype, self.device)
@@ -348,16 +350,17 @@ class MobilitySolver:
         last = self._active._last
         return None if last is None else last[:3]
 
-    def _warn_unresolved(self, geometry, length):
+    def _warn_unresolved(self, geometry, length, bodies):
         """Warn once per contact (for the life of this solver) that is closer than the contact
         refinement resolves (see refinement.refine_near_contact and the docs/benchmarks.md, stability map)."""
         for (p, q), gap in sorted(geometry.unresolved_contacts.items()):
             if (p, q) in self._warned or (q, p) in self._warned:
                 continue
             self._warned.add((p, q))
-            what = "the wall" if q == WALL else f"body {q}"
+            what = "the wall" if q == WALL else f"body {body_label(bodies[q].name, q)}"
             warnings.warn(
-                f"body {p} and {what} are {gap * length:.3g} m apart ({gap:.3g} mean radii), closer than"
+                f"body {body_label(bodies[p].name, p)} and {what} are {gap * length:.3g} m apart ({gap:.3g} mean"
+                " radii), closer than"
                 f" the mesh resolves (contact_refinement={self.options.contact_refinement:g}): the gap to the wall, or"
                 " the gap to another body (half of it with density_order 2), is under 2 % of the body's"
                 " element radius, or under three"

@@ -54,6 +54,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import runtime
 from ..surfaces.placement import check_placement
 from .deflated import RigidModes, deflated_operator, deflated_solve
 from .geometry import SurfaceGeometry
@@ -166,6 +167,7 @@ def solve_traction(bodies, shear_rate: float = 0.0, viscosity: float = Flow.visc
     flow (``load_traction``). ``options``: the ``SolverOptions`` of the solve (quadrature,
     contact refinement, GMRES, precision, operator mode); the traction is constant per element,
     so its density order is 1 (the contact refinement's default follows it)."""
+    runtime.resolve_device(device)  # a device this machine lacks: DeviceError before any work
     bodies = checked_bodies(bodies)
     flow = Flow(shear_rate, viscosity, wall)
     shear_rate, viscosity = flow.shear_rate, flow.viscosity
