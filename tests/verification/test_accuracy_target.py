@@ -10,9 +10,9 @@ resistance matrix) and the normal one (Brenner 1961); U and Omega alone for a so
 (GCB 1967b); two spheres pushed together (Stimson &
 Jeffery 1926) and towards each other (Maude 1961). The true error is the largest relative error
 of these. Measured over 84 cases (benchmarks/accuracy_target.py, docs/benchmarks.md) the true
-error was within the accuracy in all but the 2 the target warned it could not reach (at most
-1.19 times it), and the estimate at least 0.54 of the true error and at most 3.15 times it (two
-spheres 1 radius apart at 1e-2).
+error was within the accuracy in all but the 11 the target warned it could not reach, within
+its bound in 83 (not for two spheres 0.4 radius apart at 1e-3: 2.8e-4 against 1.6e-4), and the
+estimate at least 0.47 of the true error and at most 5.0 times it (the same spheres at 1e-4).
 """
 
 import numpy as np
@@ -87,17 +87,18 @@ def pair_errors(gap: float, accuracy: float):
                          + [("fixed", g, 1e-3) for g in (0.2, 0.5, 1.0, 2.0)]
                          + [("pair", g, 1e-2) for g in (0.2, 0.4, 1.0, 2.0, 4.0)]
                          + [("pair", g, 1e-3) for g in (1.0, 2.0, 4.0)])
-def test_the_true_error_is_within_the_accuracy_and_the_estimate_within_a_factor_3_2_of_it(part, gap, accuracy):
-    """The target's promise: the true error within the accuracy asked, the chosen setting's bound
-    (its estimate times its table's margin, hydro/accuracy.py MARGINS) too. The estimate within a
-    factor 3.2 of the true error either way: informative, not merely safe. Of these cases (and of
-    the check's 84) only the two spheres 1 radius apart at 1e-2 lie outside a factor 3: their
-    estimate 5.4e-3 is 3.15 times the true error."""
+def test_the_true_error_is_within_its_bound_and_the_accuracy_and_the_estimate_within_3_2_times_it(part, gap, accuracy):
+    """The target's promise: the true error within the chosen setting's bound (its estimate
+    times its margin, hydro/accuracy.py MARGINS), and the bound within the accuracy asked. The
+    estimate is not so pessimistic that it is useless: at most 3.2 times the true error. Of these
+    cases only the two spheres 1 radius apart at 1e-2 lie outside a factor 3 (their estimate
+    5.4e-3, 3.15 times the true error); of the check's 84 also the pair 0.4 radius apart at 1e-4
+    (5.0)."""
     errors = {"wall": lambda: wall_errors(1.0 + gap, accuracy), "shear": lambda: shear_errors(1.0 + gap, accuracy),
               "fixed": lambda: fixed_errors(1.0 + gap, accuracy), "pair": lambda: pair_errors(gap, accuracy)}
     error, chosen = errors[part]()
-    assert error <= accuracy and chosen.error_bound <= accuracy, (error, chosen)
-    assert 1 / 3.2 <= chosen.error_estimate / error <= 3.2, (error, chosen)
+    assert error <= chosen.error_bound <= accuracy, (error, chosen)
+    assert chosen.error_estimate <= 3.2 * error, (error, chosen)
 
 
 @pytest.mark.parametrize("accuracy", [1e-2, 1e-3])
