@@ -63,6 +63,18 @@ class ChosenSettings:
     own refined sizes (module docstring), the cost it was chosen by; error_bound: the largest of
     the bodies' estimates times its table's margin (``MARGINS``), what the target keeps within
     the accuracy (above it only where it warned that no measured setting reaches it).
+
+    Examples
+    --------
+    A free cell two radii above the wall solved to 1e-2: the target picks the mesh, density
+    and refinement, and estimates the error it reaches:
+
+    >>> import warpbem as wb
+    >>> cell = wb.Body(wb.mesh.sphere(radius=5e-6), position=(0.0, 0.0, 15e-6))
+    >>> sol = wb.solve_mobility([cell], shear_rate=100.0, options=wb.SolverOptions(accuracy=1e-2))
+    >>> chosen = sol.chosen
+    >>> chosen.subdivisions, chosen.density_order, bool(chosen.error_estimate <= 1e-2)
+    (2, 1, True)
     """
 
     subdivisions: int | None

@@ -78,7 +78,22 @@ class TreecodeOptions:
     ``FarField.points_per_direction``; measured errors: docs/benchmarks.md "Large arrays"); near_field: "stored" (the exact near-field blocks assembled once
     and applied with BLAS), "recomputed" (their element integrals recomputed in every product,
     memory O(N) with a small constant), or "auto": stored while they take at most
-    ``near_memory_fraction`` of the device's memory."""
+    ``near_memory_fraction`` of the device's memory.
+
+    Examples
+    --------
+    A large array's solves through the treecode, its far field to 1e-4 (``SolverOptions``
+    carries it to every solve):
+
+    >>> import warpbem as wb
+    >>> options = wb.SolverOptions(operator="treecode", treecode=wb.TreecodeOptions(tolerance=1e-4))
+    >>> options.treecode.near_field
+    'auto'
+    >>> wb.TreecodeOptions(near_field="sometimes")
+    Traceback (most recent call last):
+    ...
+    warpbem.options.OptionError: near_field: 'sometimes' is not one of 'auto', 'stored', 'recomputed'
+    """
 
     tolerance: float = option(1e-6, "relative error of a far-field product aimed at (the Chebyshev points per"
                               " direction in each box follow from it)", low=1e-12, high=0.1)
