@@ -136,7 +136,28 @@ class FrozenArraySolver:
     solver: a MobilitySolver with the settings of both solves (it solves the near systems; a
     fresh copy solves the background); treecode: the options of the background flow's tree,
     built from ``tree_elements`` adherent elements on (``BackgroundField``). The fixed bodies
-    must be the same in every call (set up at the first)."""
+    must be the same in every call (set up at the first).
+
+    Examples
+    --------
+    A free cell beside the first of three adherent cells 60 um apart: with a 30 um cut-off
+    only that one is solved with it, the others keep their background; the free cell's
+    velocity is that of the whole system's solve to 1e-5:
+
+    >>> import numpy as np
+    >>> import warpbem as wb
+    >>> sphere = wb.mesh.sphere(radius=5e-6, subdivisions=2)
+    >>> adherent = [wb.Body(sphere, position=(x, 0.0, 7.5e-6), fixed=True) for x in (0.0, 60e-6, 120e-6)]
+    >>> free = wb.Body(sphere, position=(-15e-6, 0.0, 10e-6))
+    >>> options = wb.SolverOptions(density_order=1)
+    >>> split = wb.FrozenArraySolver(wb.MobilitySolver(shear_rate=100.0, options=options), cutoff=30e-6)
+    >>> near = split.solve([free, *adherent])
+    >>> split.near_bodies.tolist()
+    [1]
+    >>> whole = wb.MobilitySolver(shear_rate=100.0, options=options).solve([free, *adherent])
+    >>> bool(np.abs(near.velocity[0] - whole.velocity[0]).max() < 1e-5 * np.abs(whole.velocity[0]).max())
+    True
+    """
 
     def __init__(self, solver: MobilitySolver, cutoff: float = DEFAULT_CUTOFF, treecode: TreecodeOptions | None = None,
                  tree_elements: int = TREE_ELEMENTS):

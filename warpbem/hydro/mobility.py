@@ -42,6 +42,16 @@ class MobilitySolution:
     fixed bodies. force (N) and torque (N m, about the reference point): for free bodies the
     given external ones; for fixed bodies the external load that holds them, which is minus the
     hydrodynamic force and torque.
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> cell = wb.Body(wb.mesh.sphere(radius=5e-6, subdivisions=2), position=(0.0, 0.0, 10e-6))
+    >>> sol = wb.solve_mobility([cell], shear_rate=100.0)
+    >>> sol.velocity.shape, sol.angular_velocity.shape, sol.converged, sol.residual < 1e-8
+    ((1, 3), (1, 3), True, True)
+    >>> print(f"U = {sol.velocity[0, 0] * 1e6:.0f} um/s")   # the wall holds it below the flow's 1000 um/s
+    U = 964 um/s
     """
 
     velocity: np.ndarray
@@ -110,6 +120,22 @@ class MobilitySolver:
     With ``options.accuracy`` each solve first chooses its settings (``accuracy.py``) and hands
     the bodies, rebuilt on the chosen library meshes, to a solver of those settings, one kept
     per setting; its solutions carry ``chosen``.
+
+    Examples
+    --------
+    In unbounded simple shear a torque-free sphere moves with the fluid at its centre and
+    spins at half the vorticity (shear_rate / 2 about y); one solver for several positions:
+
+    >>> import warpbem as wb
+    >>> solver = wb.MobilitySolver(shear_rate=100.0, viscosity=1e-3, wall=False)
+    >>> cell = wb.mesh.sphere(radius=5e-6, subdivisions=2)
+    >>> for height in (10e-6, 20e-6):
+    ...     sol = solver.solve([wb.Body(cell, position=(0.0, 0.0, height))])
+    ...     print(f"{sol.velocity[0, 0] / (100.0 * height):.4f} {sol.angular_velocity[0, 1] / 50.0:.4f}")
+    1.0000 1.0000
+    1.0000 1.0000
+    >>> solver.operator_description
+    'dense'
     """
 
     def __init__(self, shear_rate: float = 0.0, viscosity: float = Flow.viscosity, wall: bool = True, device="cpu",
@@ -382,6 +408,30 @@ def solve_mobility(bodies, shear_rate: float = 0.0, viscosity: float = Flow.visc
     density order, contact refinement, GMRES tolerance, precision, operator mode; each field
     documented there, defaults resolved for a solve); initial_guess: a previous solution's
     ``solution_vector``. For repeated solves use ``MobilitySolver``.
+
+    Examples
+    --------
+    Stokes's law: a sphere pulled by 1 pN in unbounded fluid moves at F / (6 pi mu a), here
+    within 0.2 % on the k = 2 mesh of 24 elements:
+
+    >>> import math
+    >>> import warpbem as wb
+    >>> cell = wb.Body(wb.mesh.sphere(radius=5e-6, subdivisions=2))
+    >>> sol = wb.solve_mobility([cell], viscosity=1e-3, wall=False, forces=[[1e-12, 0.0, 0.0]])
+    >>> print(f"{sol.velocity[0, 0] / (1e-12 / (6 * math.pi * 1e-3 * 5e-6)):.3f}")
+    1.001
+
+    A free cell in wall shear beside a held one (thesis ch. 5.3): the free cell's motion, and
+    the force holding the adherent cell against the flow:
+
+    >>> sphere = wb.mesh.sphere(radius=5e-6, subdivisions=2)
+    >>> free = wb.Body(sphere, position=(-20e-6, 10.5e-6, 7.75e-6))
+    >>> adherent = wb.Body(sphere, position=(0.0, 0.0, 7.5e-6), fixed=True)
+    >>> sol = wb.solve_mobility([free, adherent], shear_rate=100.0)
+    >>> sol.velocity.shape, sol.converged
+    ((2, 3), True)
+    >>> bool(sol.velocity[0, 0] > 0 and sol.force[1, 0] < 0)   # carried downstream; held upstream
+    True
     """
     solver = MobilitySolver(shear_rate, viscosity, wall, device, options, keep_systems=False)
     return solver.solve(bodies, forces, torques, initial_guess)

@@ -73,7 +73,19 @@ TIME_STEPPING_DENSITY_ORDER = 1
 
 @dataclass(frozen=True)
 class Flow:
-    """Undisturbed flow u = shear_rate z e_x above the no-slip wall z = 0 (if ``wall``)."""
+    """Undisturbed flow u = shear_rate z e_x above the no-slip wall z = 0 (if ``wall``).
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> flow = wb.Flow(shear_rate=100.0)            # 1/s; plasma's viscosity by default
+    >>> flow.viscosity, flow.wall
+    (0.0012, True)
+    >>> wb.Flow(shear_rate=100.0, viscosity=0.0)
+    Traceback (most recent call last):
+    ...
+    warpbem.options.OptionError: viscosity: 0 is outside the allowed range (0, 1000]
+    """
 
     shear_rate: float = option(0.0, "shear rate of the undisturbed flow u = shear_rate z e_x", "1/s",
                                low=-1e6, high=1e6, plausible=units.PLAUSIBLE_SHEAR_RATE)
@@ -87,7 +99,26 @@ class Flow:
 
 @dataclass(frozen=True)
 class SolverOptions:
-    """Settings of the boundary-element solves and of how the time step reuses them."""
+    """Settings of the boundary-element solves and of how the time step reuses them.
+
+    Examples
+    --------
+    The defaults left open (``None``) are resolved by the context: a solve takes the bilinear
+    density and a contact refinement of 1.1, a time-stepped model the constant density and 3.0;
+    the GMRES tolerance follows the precision. A value out of range is refused with its field:
+
+    >>> import warpbem as wb
+    >>> options = wb.SolverOptions(quadrature_order=3)
+    >>> solve, stepping = options.resolved(), options.resolved(time_stepping=True)
+    >>> solve.density_order, solve.contact_refinement, stepping.density_order, stepping.contact_refinement
+    (2, 1.1, 1, 3.0)
+    >>> wb.SolverOptions().resolved().tolerance, wb.SolverOptions(dtype="float32").resolved().tolerance
+    (1e-08, 1e-06)
+    >>> wb.SolverOptions(quadrature_order=0)
+    Traceback (most recent call last):
+    ...
+    warpbem.options.OptionError: quadrature_order: 0 is outside the allowed range [1, 10]
+    """
 
     quadrature_order: int = option(2, "Gauss points per direction on an element and on each adaptive sub-panel"
                                    " (2 x 2 reaches the seed's 3 x 3 accuracy at 60 % of the cost:"
