@@ -94,7 +94,8 @@ def check(fronts: list[dict], checked: list[tuple], accuracies) -> list[dict]:
         cheapest = min(reaching, key=lambda r: r["ms"]) if reaching else None
         rows.append({"part": part, "gap": gap, "accuracy": target, "k": chosen.subdivisions,
                      "p": chosen.density_order, "ratio": chosen.contact_refinement, "estimate": chosen.error_estimate,
-                     "bound": chosen.error_bound, "error": solved["error"], "estimate/error": chosen.error_estimate / solved["error"],
+                     "bound": chosen.error_bound, "error": solved["error"],
+                     "estimate/error": chosen.error_estimate / solved["error"],
                      "ms": solved["ms"], "cheapest": "-" if cheapest is None else
                      f"{cheapest['k']}/{cheapest['p']}/{cheapest['ratio']:g}",
                      "cheapest_ms": np.nan if cheapest is None else cheapest["ms"],
@@ -203,8 +204,8 @@ def main():
     if args.calibrate:
         print(f"margins: {calibrate(fronts, checked, args.accuracies)} (in use: {accuracy.MARGINS})")
     rows = check(fronts, checked, args.accuracies)
-    print_table(rows, {"estimate": "{:.2e}", "bound": "{:.2e}", "error": "{:.2e}", "estimate/error": "{:.2f}", "ms": "{:.1f}",
-                       "cheapest_ms": "{:.1f}", "cost/cheapest": "{:.2f}"})
+    print_table(rows, {"estimate": "{:.2e}", "bound": "{:.2e}", "error": "{:.2e}", "estimate/error": "{:.2f}",
+                       "ms": "{:.1f}", "cheapest_ms": "{:.1f}", "cost/cheapest": "{:.2f}"})
     within = [r for r in rows if 1 / 3 <= r["estimate/error"] <= 3]
     judged = [r for r in rows if r["cheapest"] != "-"]
     over = [r for r in rows if r["error"] > r["accuracy"]]
