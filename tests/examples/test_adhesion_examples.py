@@ -72,21 +72,30 @@ def test_sweep_on_dask(tmp_path, capsys):
     assert [r["settling_velocity"] for r in rows] == pytest.approx([-d / end for d in dz], rel=1e-12)
 
 
-# the full state diagram's classification at these four points (scenes/README.md, "The adhesion
-# state diagram": runs of 0.2 s at k = 3), the published shape of Chang, Tees & Hammer (2000)
-FULL_DIAGRAM = {(1.0, 0.1e-10): "firm adhesion", (1.0, 1.2e-10): "no adhesion",
-                (100.0, 0.1e-10): "rolling", (100.0, 1.2e-10): "no adhesion"}
+# REGRESSION reference, not a published one: the states that this code's own earlier run of the
+# full diagram (scenes/README.md, "The adhesion state diagram": 5 x 4 runs of 0.2 s at k = 3, V /
+# V_free 0.0015, 0.67, 0.11 and 0.76 at these points) gave at the four points of the small one.
+# Chang, Tees & Hammer (2000) publish the diagram's shape only for their own model's parameters,
+# so the published part checked below is the ordering of the states, not these labels.
+FULL_DIAGRAM_EARLIER_RUN = {(1.0, 0.1e-10): "firm adhesion", (1.0, 1.2e-10): "no adhesion",
+                            (100.0, 0.1e-10): "rolling", (100.0, 1.2e-10): "no adhesion"}
 
 
-def test_state_diagram(tmp_path, capsys):
-    """A 2 x 2 state diagram of 10 ms runs at k = 2 (mobility snapshots on a 10 nm lattice: 9e-4 of
-    the velocity, docs/adhesion.md) gives the states of the full diagram at its four points: firm
-    adhesion at slow rupture and short reach, rolling where rupture is 100 times faster, no
-    adhesion at the long reactive compliance."""
+def test_state_diagram_regression_against_the_full_diagrams_earlier_run(tmp_path, capsys):
+    """Regression test: a 2 x 2 state diagram of 10 ms runs at k = 2 (mobility snapshots on a
+    10 nm lattice: 9e-4 of the velocity, docs/adhesion.md) gives the states this code's run of
+    the full diagram gave at its four points (``FULL_DIAGRAM_EARLIER_RUN``): firm adhesion at
+    slow rupture and short reach, rolling where rupture is 100 times faster, no adhesion at the
+    long reactive compliance, each with a margin of the rule's thresholds. Independent of that
+    run: Bell's rupture rate k_r = k_r0 exp(r0 F / kT) (thesis eq. 4.1) grows with k_r0 and with
+    r0, so V / V_free grows along both axes (the shape Chang, Tees & Hammer 2000 publish)."""
     ex = example("state_diagram")
     rows = ex.main(tmp_path, end=0.01, subdivisions=2, overrides=["solver.reuse_tolerance=1e-8"])
     assert "firm adhesion" in capsys.readouterr().out and (tmp_path / "states.png").stat().st_size > 10_000
-    assert {(r["off_rate"], r["reactive_compliance"]): r["state"] for r in rows} == FULL_DIAGRAM
+    assert {(r["off_rate"], r["reactive_compliance"]): r["state"] for r in rows} == FULL_DIAGRAM_EARLIER_RUN
     for r in rows:  # and with a margin of the rule's thresholds (1 % and 50 % of V_free)
         low, high = {"firm adhesion": (-1.0, 0.002), "rolling": (0.03, 0.3), "no adhesion": (0.55, 1.0)}[r["state"]]
         assert low < r["velocity_ratio"] < high and (r["bonds_end"] > 0 or r["state"] == "no adhesion")
+    ratio = {(r["off_rate"], r["reactive_compliance"]): r["velocity_ratio"] for r in rows}
+    assert ratio[1.0, 0.1e-10] < ratio[100.0, 0.1e-10] < ratio[100.0, 1.2e-10]  # faster rupture
+    assert ratio[1.0, 0.1e-10] < ratio[1.0, 1.2e-10] < ratio[100.0, 1.2e-10]  # longer reach

@@ -6,7 +6,9 @@ ran (fixed in 944f8b3). Here a small adhesive run steps with the collector off, 
 its own, so memory held by any such cycle stays held and shows at once: at the commit before the
 fix (944f8b3^) this run held 3.1 GB at step 50 and 3.6 GB at step 150 (peak 3.6 GB); now 0.80
 and 0.82 GB (peak 1.2 GB; the store of hydrodynamic snapshots fills in the first 50 steps).
-benchmarks/memory.py measures the scenes' long runs.
+The test bounds the growth, which a leak makes and which does not depend on the machine; the
+absolute peak, which does (the libraries, the allocator), is measured and held to its bound by
+benchmarks/memory.py, with the scenes' long runs.
 """
 
 import json
@@ -49,12 +51,6 @@ def resident():
     with open("/proc/self/statm") as f:
         return int(f.read().split()[1]) * resource.getpagesize()
 
-def peak():
-    # VmHWM: this image's high-water mark; ru_maxrss also keeps the forked parent's (pytest's)
-    # from before the exec, which made the test depend on what the suite had run before it
-    with open("/proc/self/status") as f:
-        return next(int(line.split()[1]) * 1024 for line in f if line.startswith("VmHWM:"))
-
 scene = scenes.load(sys.argv[1])
 state, sim = scene.initial_state(), Simulator(scene.model, "cpu")
 gc.disable()
@@ -62,20 +58,17 @@ rss = {}
 for step in range(1, 151):
     state, _ = sim.step(state, scene.next_stop(state.time))
     rss[step] = resident()
-print(json.dumps({"rss_50": rss[50], "rss_150": rss[150],
-                  "peak": peak()}))
+print(json.dumps({"rss_50": rss[50], "rss_150": rss[150]}))
 """
 
 MB = 2**20
 
 
-def test_a_small_adhesive_run_stays_within_its_memory_over_150_steps(tmp_path):
-    """150 steps of a k = 2 cell rolling on Table 4.1's bonds, the collector off: peak resident
-    memory under 2 GB (1.2 GB; 3.6 GB with the cycle) and growth from step 50 to 150 under 100 MB
-    (28 MB; 574 MB with the cycle)."""
+def test_a_small_adhesive_run_keeps_its_memory_over_150_steps(tmp_path):
+    """150 steps of a k = 2 cell rolling on Table 4.1's bonds, the collector off: resident memory
+    grows from step 50 to 150 by under 100 MB (28 MB; 574 MB with the cycle)."""
     path = tmp_path / "scene.toml"
     path.write_text(SCENE)
     child = subprocess.run([sys.executable, "-c", CHILD, str(path)], capture_output=True, text=True, check=True)
     measured = json.loads(child.stdout.strip().splitlines()[-1])
-    assert measured["peak"] < 2048 * MB, measured
     assert measured["rss_150"] - measured["rss_50"] < 100 * MB, measured
