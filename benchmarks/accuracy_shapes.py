@@ -60,7 +60,7 @@ def main():
     if args.reference:
         k, p, ratio = args.finest.split("/")
         finest = solved(bodies, accuracy.ChosenSettings(int(k), int(p), float(ratio), np.nan, np.nan, np.nan,
-                                                        np.nan))[1]
+                                                        np.nan, np.nan))[1]
     rows, progress = [], Progress(2 * len(args.accuracies))
     for target in args.accuracies:
         with warnings.catch_warnings():
