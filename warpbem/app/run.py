@@ -91,9 +91,18 @@ def run(scene, output, overrides=(), device="cpu", resume=False, progress=print,
 
     Examples
     --------
+    A cell settling for two steps, built in Python (``Scene.of``; ``load_scene`` reads a scene file):
+
     >>> import warpbem as wb
-    >>> scene = wb.load_scene("scenes/settling_cell.toml", ["time.end=1e-3"])   # doctest: +SKIP
-    >>> final = wb.run(scene, "results/settling.h5", overwrite=True)           # doctest: +SKIP
+    >>> cell = wb.mesh.sphere(radius=5e-6, subdivisions=2)
+    >>> model = wb.Model([cell], [False], wb.Flow(shear_rate=0.0), interactions=[wb.Gravity([1070.0])])
+    >>> scene = wb.Scene.of(model, [[0.0, 0.0, 6e-6]], end=2e-4)
+    >>> final = wb.run(scene, "settle.h5")
+    t = 0.0001 / 0.0002 s  steps 1  ... steps/s  dt 1.00e-04 s  GMRES ... (dense)  snapshots 0  ETA ...
+    t = 0.0002 / 0.0002 s  steps 2  ...
+    done: 2 steps, t = 0 -> 0.0002 s simulated in ... s; 3 frames in settle.h5
+    >>> final = wb.run(scene, "settle.h5", resume=True)
+    settle.h5: finished already (t = 0.0002 s = time.end); nothing to run. To run it on, resume with a later end (--set time.end=...)
     """
     output, report = Path(output), progress or (lambda line: None)
     given, path = (scene, None) if isinstance(scene, Scene) else (None, scene)

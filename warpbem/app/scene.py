@@ -78,7 +78,14 @@ class Physics:
 @dataclass(frozen=True)
 class RunSettings:
     """How long a scene runs and which states become frames (the [time] table with the
-    ``StepPolicy``'s keys)."""
+    ``StepPolicy``'s keys).
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> wb.RunSettings(end=0.01).frame_every, wb.RunSettings(end=0.01, frame_interval=1e-3).frame_every
+    (1, None)
+    """
 
     end: float | None = option(None, "simulated time to run to. Required", "s", kind=float, low=0.0, high=1e6,
                                low_open=True)
@@ -180,7 +187,16 @@ class Scene:
     frames every ``frame_every`` steps or every ``frame_interval`` seconds) and the sweep axes.
     Read from a scene file by ``load_scene``, or built in a script by ``Scene.of``; either way
     ``warpbem.run`` runs it. ``raw``: the scene table it was read from (None when built in
-    Python); ``table()`` is what the run file stores."""
+    Python); ``table()`` is what the run file stores.
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> model = wb.Model([wb.mesh.sphere(radius=5e-6, subdivisions=2)], [False], wb.Flow(shear_rate=100.0))
+    >>> scene = wb.Scene.of(model, [[0.0, 0.0, 7e-6]], end=1e-3, frame_every=2)
+    >>> scene.initial_state().positions.tolist(), scene.next_stop(0.0)
+    ([[0.0, 0.0, 7e-06]], 0.001)
+    """
 
     raw: dict | None
     bodies: tuple  # BodySpec per body (a scene file) or Body (Scene.of)
@@ -438,7 +454,32 @@ def apply_overrides(table: dict, overrides) -> dict:
 
 
 def load(path, overrides=()) -> Scene:
-    """Read, override and validate a scene file; also checks that the bodies do not overlap."""
+    """Read a scene file (TOML), apply ``overrides`` ("key=value" strings with dotted keys, as
+    ``warpbem run --set``) and validate it: the Scene holds its Model, built by the same public
+    constructors a script uses, the bodies' start and the run settings. Also checks that the
+    bodies do not overlap. ``warpbem.load_scene``.
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> from pathlib import Path
+    >>> _ = Path("settle.toml").write_text('''
+    ... [flow]
+    ... shear_rate = 0.0
+    ... [physics]
+    ... gravity = true
+    ... [time]
+    ... end = 0.01
+    ... [[bodies]]
+    ... name = "cell"
+    ... position = [0.0, 0.0, 6.0e-6]
+    ... density = 1070.0
+    ... mesh = { shape = "sphere", radius = 5.0e-6, subdivisions = 2 }
+    ... ''')
+    >>> scene = wb.load_scene("settle.toml", ["time.end=2e-4"])
+    >>> scene.model.names, scene.end, scene.model.interaction("gravity").densities.tolist()
+    (('cell',), 0.0002, [1070.0])
+    """
     path = Path(path)
     try:
         table = tomllib.loads(path.read_text())

@@ -67,7 +67,18 @@ def frame_columns(model) -> dict[str, Column]:
 
 @dataclass(frozen=True)
 class Frame:
-    """One state's record (units as in ``frame_columns``); ``loads``: {interaction name: Loads}."""
+    """One state's record (units as in ``frame_columns``); ``loads``: {interaction name: Loads}.
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> model = wb.Model([wb.mesh.sphere(radius=5e-6, subdivisions=2)], [False], wb.Flow(shear_rate=100.0))
+    >>> frame = wb.Simulator(model).frame(model.initial_state([[0.0, 0.0, 10e-6]]))
+    >>> round(float(frame.velocity[0, 0]) / (100.0 * 10e-6), 2)   # U / (shear rate x height), h/a = 2
+    0.97
+    >>> sorted(frame.columns())[:4]
+    ['angular_velocity', 'closest_body_gap', 'closest_gap', 'dt']
+    """
 
     time: float
     dt: float

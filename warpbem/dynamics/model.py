@@ -58,7 +58,15 @@ DT_MIN = 1e-5  # s: the shortest step by default (thesis ch. 3.3: 1e-4 to 1e-5 s
 @dataclass(frozen=True)
 class StepPolicy:
     """Adaptive step: dt = dt_max far from contact, shrinking in proportion to the smallest gap
-    below ``contact_gap`` (m) down to dt_min (thesis ch. 3.3: 1e-4 to 1e-5 s)."""
+    below ``contact_gap`` (m) down to dt_min (thesis ch. 3.3: 1e-4 to 1e-5 s).
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> policy = wb.StepPolicy(dt_max=1e-4, contact_gap=0.5e-6)
+    >>> policy.dt_min, policy.dt(0.25e-6)    # s: the default shortest step; the step at a 250 nm gap
+    (1e-05, 5e-05)
+    """
 
     dt_max: float = option(1e-4, "the step far from contact", "s", low=0.0, low_open=True)
     dt_min: float | None = option(None, "the shortest step, near contact (and of retries). Default: 1e-5 or dt_max"
@@ -95,7 +103,23 @@ class Model:
     the ``flow``, the ``interactions`` switched on (``forces``: Gravity, ExternalLoads,
     Repulsion, ...; configurations, each checked against the bodies here), the solver options
     (their context defaults resolved for time stepping, ``SolverOptions.resolved``), the step
-    policy and the scheme ("euler" or "heun")."""
+    policy and the scheme ("euler" or "heun").
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> cell = wb.mesh.sphere(radius=5e-6, subdivisions=2)
+    >>> model = wb.Model([cell, cell], [False, True], wb.Flow(shear_rate=100.0),
+    ...                  interactions=[wb.Gravity([1070.0, 1070.0]), wb.Repulsion()], names=["free", "adherent"])
+    >>> model.n_bodies, model.solver.density_order, model.solver.reuse_tolerance
+    (2, 1, 0.0)
+
+    With bonds the mobility is reused across steps on a 2 nm lattice, as in a scene file:
+
+    >>> bonds = wb.Adhesion(wb.BondOptions(spring_constant=5e-4))
+    >>> wb.Model([cell], [False], interactions=[wb.Repulsion(), bonds]).solver.reuse_tolerance
+    2e-09
+    """
 
     meshes: tuple
     fixed: tuple

@@ -134,6 +134,22 @@ class Simulator:
     (its kept blocks of fixed bodies and warm start) and the evaluation of the state it returned
     last, which the next step starts from: a cache of a pure function of that state, never a way
     to pass results.
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> cell = wb.mesh.sphere(radius=5e-6, subdivisions=2)
+    >>> model = wb.Model([cell, cell], [False, True], wb.Flow(shear_rate=100.0),
+    ...                  interactions=[wb.Gravity([1070.0, 1070.0]), wb.Repulsion()], names=["free", "adherent"])
+    >>> sim = wb.Simulator(model, device="cpu")
+    >>> state = model.initial_state([[-12e-6, 0.0, 6e-6], [0.0, 0.0, 5.25e-6]])
+    >>> state, frame = sim.step(state)      # one step: the next state and its frame
+    >>> state.steps, state.time
+    (1, 0.0001)
+    >>> round(frame.wall_gap * 1e6, 2), round(frame.closest_body_gap * 1e6, 2)   # um
+    (1.0, 2.0)
+
+    ``warpbem.run`` runs a whole scene with progress lines, HDF5 frames and resume.
     """
 
     def __init__(self, model: Model, device="cpu"):

@@ -14,7 +14,17 @@ class State:
     bodies' reference points; ``steps``: steps taken since t = 0 (it sets the frame schedule
     and, with a seed, counter-based random streams); ``parts``: the state owned by interactions,
     {interaction name: {column: array}} (``forces/interaction.py`` says how an interaction adds
-    its part)."""
+    its part).
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> state = wb.State(0.0, positions=[[0.0, 0.0, 6e-6]], orientations=[[1.0, 0.0, 0.0, 0.0]])
+    >>> state.time, state.positions.shape, state.steps
+    (0.0, (1, 3), 0)
+
+    A model places its bodies and starts its interactions' own parts (``Model.initial_state``).
+    """
 
     time: float
     positions: np.ndarray

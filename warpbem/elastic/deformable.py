@@ -118,7 +118,14 @@ def balanced(mesh: Mesh, traction: np.ndarray, where=None) -> np.ndarray:
 
 @dataclass(frozen=True)
 class DeformationOptions:
-    """How deformable cells are modelled (module docstring)."""
+    """How deformable cells are modelled (module docstring).
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> wb.DeformationOptions(update_interval=5).relaxation
+    True
+    """
 
     relaxation: bool = option(True, "the fluid's resistance to the deformation: relaxation time tau = 3 mu / 2G"
                               " (Roscoe 1967); false: quasi-static, u = u*")
@@ -148,7 +155,16 @@ class Deformation(Interaction):
     body of the model): per body ``shear_modulus`` (Pa) and ``poisson_ratio``; ``options`` the
     ``DeformationOptions``. The relaxation time takes the model's flow, the traction and the
     interior elastic problem its ``SolverOptions`` (quadrature, contact refinement, GMRES,
-    operator mode)."""
+    operator mode).
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> soft = wb.Deformation(deformable=[True], shear_modulus=[4e3], poisson_ratio=[0.33])
+    >>> model = wb.Model([wb.mesh.sphere(radius=5e-6, subdivisions=2)], [False], interactions=[soft])
+    >>> model.interaction("deformation").options.update_interval
+    1
+    """
 
     name = "deformation"
     shapes_bodies = True

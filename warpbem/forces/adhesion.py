@@ -33,7 +33,18 @@ class Adhesion(BondLaws, Interaction):
     ``adhesive`` (default: every free body). The parameters are also attributes of the same
     names, with the layers ``options`` leaves out taken from ``repulsion``'s roughness (a
     ``Model`` sets it to its own ``Repulsion``; default: the repulsion's defaults). The receptors
-    are sampled on the model's meshes when it is bound (``BoundAdhesion``)."""
+    are sampled on the model's meshes when it is bound (``BoundAdhesion``).
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> cell = wb.mesh.sphere(radius=5e-6, subdivisions=2)
+    >>> bonds = wb.Adhesion(wb.BondOptions(spring_constant=5e-4, on_rate=365.0, off_rate=2.4),
+    ...                     shear_modulus=[4e3])        # Pa: the Hertz patch of the cell
+    >>> model = wb.Model([cell], [False], wb.Flow(shear_rate=100.0), interactions=[wb.Repulsion(), bonds])
+    >>> model.interaction("bond").roughness    # m: the receptors' tips, from the repulsion's cell roughness
+    1.75e-07
+    """
 
     name = "bond"
     implicit = True

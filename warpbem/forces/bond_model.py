@@ -78,7 +78,15 @@ SITE_SEED_OFFSET = 1_000_003  # the ligand sites' hash seed, seed + this: a wall
 
 @dataclass(frozen=True)
 class BondOptions:
-    """The bond model's parameters (module docstring; defaults: thesis Table 4.1)."""
+    """The bond model's parameters (module docstring; defaults: thesis Table 4.1).
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> options = wb.BondOptions(spring_constant=5e-4)     # N/m: Table 4.1's soft bonds, 0.5 dyn/cm
+    >>> options.spring_constant, options.roughness is None  # layers left to the model's repulsion
+    (0.0005, True)
+    """
 
     spring_constant: float | None = option(None, "bond spring constant sigma (eq. 4.3; Table 4.1: 0.5-100 dyn/cm ="
                                            " 5e-4-0.1 N/m). Required", "N/m", kind=float, low=0.0, high=1e3,

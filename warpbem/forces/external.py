@@ -45,7 +45,17 @@ class ConstantLoads(BoundInteraction):
 class Gravity(Interaction):
     """Weight less buoyancy, (rho_body - rho_fluid) V g, downwards (-z), on each free body
     (thesis fig. 2.5: a cell of 1.05 g/cc in plasma of 1.0 g/cc sinks): ``densities`` (kg/m^3,
-    one per body of the model), ``fluid_density`` (kg/m^3), ``acceleration`` g (m/s^2)."""
+    one per body of the model), ``fluid_density`` (kg/m^3), ``acceleration`` g (m/s^2).
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> cell = wb.mesh.sphere(radius=5e-6, subdivisions=2)
+    >>> gravity = wb.Gravity([1070.0], fluid_density=1000.0)
+    >>> weight = gravity.bound(wb.Model([cell], [False], interactions=[gravity])).force
+    >>> round(float(weight[0, 2]) * 1e12, 3)     # pN: 70 kg/m^3 x the mesh's volume x g, downwards
+    -0.359
+    """
 
     name = "gravity"
 
@@ -77,7 +87,16 @@ class Gravity(Interaction):
 @dataclass(frozen=True, eq=False)
 class ExternalLoads(Interaction):
     """Given constant ``forces`` (N) and ``torques`` (N m, about the reference point), one row
-    of 3 per body of the model, on free bodies."""
+    of 3 per body of the model, on free bodies.
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> push = wb.ExternalLoads(forces=[[0.0, 0.0, -1e-12]], torques=[[0.0, 0.0, 0.0]])   # 1 pN down
+    >>> model = wb.Model([wb.mesh.sphere(radius=5e-6, subdivisions=2)], [False], interactions=[push])
+    >>> model.interaction("external").forces.tolist()
+    [[0.0, 0.0, -1e-12]]
+    """
 
     name = "external"
 

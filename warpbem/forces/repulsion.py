@@ -49,7 +49,16 @@ NEGLIGIBLE_FORCE = 1e-18  # N: contacts whose force would be smaller are left ou
 @dataclass(frozen=True)
 class Repulsion(Interaction):
     """Thesis eq. 3.1 in SI: ``coefficient`` F0 (J), ``inverse_length`` tau (1/m), roughness (m).
-    Acts between each free body and every other body and the wall."""
+    Acts between each free body and every other body and the wall.
+
+    Examples
+    --------
+    >>> import warpbem as wb
+    >>> repulsion = wb.Repulsion()             # thesis eq. 3.1 with its F0 and tau
+    >>> eps = repulsion.separation(300e-9, to_wall=True)   # m: a 300 nm gap less both roughness layers
+    >>> round(eps * 1e9, 6), round(float(repulsion.force(10e-9)) * 1e12, 2)   # nm; pN at 10 nm
+    (75.0, 4.12)
+    """
 
     name = "repulsion"
     implicit = True
