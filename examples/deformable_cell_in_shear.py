@@ -19,8 +19,7 @@ deformable_cell_in_shear.png (D against Ca with the 5 Ca / 4 line) in the workin
 import numpy as np
 
 import warpbem as wb
-from warpbem.dynamics import Flow, Model, Simulator, StepPolicy
-from warpbem.elastic.deformable import Deformation, DeformationOptions
+from warpbem import Deformation, DeformationOptions, Flow, Model, Simulator, StepPolicy
 
 RADIUS = 5e-6          # m
 SHEAR_RATE = 100.0     # 1/s

@@ -29,7 +29,7 @@ import pathlib
 import numpy as np
 
 import warpbem as wb
-from warpbem.dynamics import Flow, Model, Simulator, SolverOptions, StepPolicy
+from warpbem import Flow, Model, Simulator, SolverOptions, StepPolicy
 
 DOME = pathlib.Path(__file__).resolve().parents[1] / "scenes" / "adherent_dome.q9"
 DOME_CENTRE = 4.5e-6   # m: the dome's reference point above the wall (its base 0.25 um above it)

@@ -5,9 +5,9 @@ its velocity, its number of bonds and its Hertz contact area against time.
 
 The scene is ``scenes/fig4_09_11_soft_bonds.toml`` as committed (Table 4.1: soft bonds, sigma =
 0.5 dyn/cm; a 5 um cell of shear modulus 4 kPa, released 240 nm above the wall in 100 1/s shear,
-its microvillus tips within reach of the wall's ligands), run by ``warpbem.app.run.run``, the
-function behind ``warpbem run``. Writes ``rolling_cell.h5`` (the run's frames) and
-``rolling_cell.png`` (the chart) in the output folder and prints one line per frame.
+its microvillus tips within reach of the wall's ligands), read by ``warpbem.load_scene`` and run
+by ``warpbem.run``, the function behind ``warpbem run``. Writes ``rolling_cell.h5`` (the run's
+frames) and ``rolling_cell.png`` (the chart) in the output folder and prints one line per frame.
 
 What to expect: before any bond the cell moves as a free sphere at that height, U = X gdot h with
 X from the exact wall series of Goldman, Cox & Brenner (1967b) (U = 345.6 um/s at h/a = 1.048);
@@ -28,7 +28,7 @@ import argparse
 from pathlib import Path
 
 from warpbem.app.io import open_result
-from warpbem.app.run import run
+from warpbem import load_scene, run
 
 SCENE = Path(__file__).resolve().parents[1] / "scenes" / "fig4_09_11_soft_bonds.toml"
 
@@ -45,7 +45,7 @@ def roll(output_dir, end=0.05, subdivisions=4, dt_max=None, device="cpu") -> dic
         overrides.append(f"time.dt_max={dt_max!r}")
     # frames every 0.5 ms as the scene has them, closer in runs shorter than 4 ms (8 at least)
     overrides.append(f"time.frame_interval={min(5e-4, end / 8)!r}")
-    run(SCENE, output, overrides, device, progress=lambda line: None, overwrite=True)
+    run(load_scene(SCENE, overrides), output, device=device, progress=None, overwrite=True)
     with open_result(output) as f:
         return {"time": f["time"][:], "velocity": f["velocity"][:, 0, 0], "x": f["position"][:, 0, 0],
                 "height": f["position"][:, 0, 2],
