@@ -67,8 +67,9 @@ def animate(run_path, gif_path=None, most: int = MAX_FRAMES, fps: float = 10.0, 
                 colour = colours[i % len(colours)]
                 # translucent fills: a cell behind another shows through it
                 ax.fill(line[:, 0], line[:, 1], color=colour, alpha=0.25, zorder=1.0 + rank)
+                depth = f"{'xyz'[depth_axis]} = {pos[j, i, depth_axis] * UM:.3g} um"
                 ax.plot(line[:, 0], line[:, 1], color=colour, lw=1.2, zorder=1.5 + rank,
-                        label=names[i] if len(names) <= 8 else None)
+                        label=f"{names[i]} ({depth})" if len(names) <= 8 else None)
             if bonds is not None and len(bonds[j]):
                 ax.plot(bonds[j][:, 0] * UM, bonds[j][:, axis] * UM, ".", color="k", ms=2, zorder=len(meshes) + 2,
                         label=f"{len(bonds[j])} bonds' ligand ends")

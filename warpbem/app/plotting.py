@@ -201,7 +201,7 @@ def run_figure(h5_path):
                 if label is not None:
                     line = outline(nodes[(i, frame)][:, shown])
                     depth = pos[frame, i, depth_axis] * um
-                    ax.annotate(f"{names[i]}\n{'yz'[view == 'top']} = {depth:.3g} um",
+                    ax.annotate(f"{names[i]}\n{'xyz'[depth_axis]} = {depth:.3g} um",
                                 (line[:, 0].mean(), line[:, 1].max()), xytext=(0, -4), textcoords="offset points",
                                 ha="center", va="top", fontsize=8, zorder=len(outlines) + 2)
     side.axhline(0.0, color="k", lw=2)
