@@ -44,7 +44,7 @@ def scene_file_cell():
 
 def frames(path) -> dict:
     with h5py.File(path, "r") as f:
-        return {name: f[name][:] for name in f}
+        return {name: value[:] for name, value in f.items() if isinstance(value, h5py.Dataset)}
 
 
 def test_a_script_and_a_scene_file_build_the_same_model():
@@ -137,3 +137,19 @@ def test_the_bond_kinetics_bound_on_the_step_holds_for_a_script_too():
     with pytest.raises(ValueError, match=r"dt_min: 0.001 s is too long for the bond kinetics \(on_rate"):
         wb.Model(scene.model.meshes, scene.model.fixed, scene.model.flow, scene.model.interactions,
                  policy=wb.StepPolicy(dt_max=1e-3, dt_min=1e-3))
+
+
+def test_a_scripts_run_file_draws_its_bodies_as_a_scene_files_does(runs):
+    """The run file holds its meshes (each distinct one once), so plot, animate and xdmf read a
+    script's run, whose model no scene table rebuilds, as they read a scene file's."""
+    from warpbem.app.io import open_result, read_meshes
+    from warpbem.app.xdmf import read_frames
+
+    folder = runs[0]
+    cell = rolling_cell_in_python().model.meshes[0]
+    for name in ("python.h5", "toml.h5"):
+        meshes, time, positions, _, _ = read_frames(folder / name)
+        assert len(meshes) == 1 and np.array_equal(meshes[0].nodes, cell.nodes)
+        assert np.array_equal(meshes[0].elements, cell.elements) and positions.shape == (3, 1, 3)
+    with open_result(folder / "python.h5") as f:
+        assert "meshes" in f and read_meshes(f)[0].n_elements == 24

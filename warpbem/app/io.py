@@ -15,6 +15,9 @@ import h5py
 import numpy as np
 
 from ..dynamics.frame import Column
+from ..surfaces.mesh import Mesh
+
+MESHES = "meshes"  # the group of a run file holding its bodies' meshes (write_meshes)
 
 
 class RunFileError(ValueError):
@@ -116,3 +119,30 @@ class TableWriter:
 
     def __exit__(self, *exc):
         self.close()
+
+
+def write_meshes(f: h5py.File, meshes) -> None:
+    """The bodies' meshes in the group MESHES of an open run file: each distinct mesh once
+    (``nodes`` m in its body frame, ``elements``; an array of alike cells shares one), and per body
+    the index of its mesh (``body_mesh``), so that the file alone draws its bodies (plot,
+    animate, xdmf), whether its scene came from a file or a script."""
+    group = f.create_group(MESHES)
+    distinct, index = {}, []
+    for mesh in meshes:
+        if id(mesh) not in distinct:
+            distinct[id(mesh)] = len(distinct)
+            sub = group.create_group(str(distinct[id(mesh)]))
+            sub.create_dataset("nodes", data=mesh.nodes).attrs["unit"] = "m"
+            sub.create_dataset("elements", data=mesh.elements)
+        index.append(distinct[id(mesh)])
+    group.create_dataset("body_mesh", data=np.array(index, dtype=np.int64))
+
+
+def read_meshes(f: h5py.File) -> list[Mesh] | None:
+    """The bodies' meshes of an open run file (write_meshes), or None in a file without them."""
+    if MESHES not in f:
+        return None
+    group = f[MESHES]
+    index = group["body_mesh"][:]
+    distinct = {j: Mesh(group[str(j)]["nodes"][:], group[str(j)]["elements"][:]) for j in set(index.tolist())}
+    return [distinct[j] for j in index.tolist()]

@@ -15,7 +15,7 @@ from ..dynamics.frame import frame_columns
 from ..dynamics.simulator import Simulator
 from ..dynamics.state import State
 from . import scene as scenes
-from .io import RunFileError, TableWriter, complete_rows, open_result
+from .io import RunFileError, TableWriter, complete_rows, open_result, write_meshes
 from .progress import eta_text
 from .scene import Scene
 
@@ -133,6 +133,7 @@ def run(scene, output, overrides=(), device="cpu", resume=False, progress=print,
         attrs["scene_folder"] = "" if scene.folder is None else str(Path(scene.folder).resolve())
         attrs["body_names"] = json.dumps(list(scene.model.names))
         attrs["near_far_split"] = sim.near_far_split
+        write_meshes(writer.file, scene.model.meshes)
         bonds = scene.model.interaction("bond")
         if bonds is not None:
             attrs["seed"] = bonds.seed  # the bond Monte Carlo's stream (kernels/bonds.py)

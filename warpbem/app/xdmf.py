@@ -21,7 +21,7 @@ import h5py
 import numpy as np
 
 from ..surfaces.body import Body
-from .io import RunFileError, complete_rows, open_result
+from .io import RunFileError, complete_rows, open_result, read_meshes
 from .scene import SceneError, parse
 
 
@@ -33,16 +33,17 @@ def read_frames(run_path: Path):
     N, 3) in the body frames or None for rigid runs) of the frames complete in every column (the
     writer fills the columns one by one), read without a lock."""
     with open_result(run_path, needs=("time", "position", "orientation", "scene", "scene_folder")) as f:
-        try:
-            scene = parse(json.loads(f.attrs["scene"]), Path(f.attrs["scene_folder"]))
-        except SceneError as err:
-            raise RunFileError(f"{run_path}: cannot rebuild the meshes of its scene: {err}") from err
+        meshes = read_meshes(f)
+        if meshes is None:  # a file of an earlier version: the meshes rebuilt from its scene
+            try:
+                meshes = [b.mesh for b in parse(json.loads(f.attrs["scene"]), Path(f.attrs["scene_folder"])).bodies]
+            except SceneError as err:
+                raise RunFileError(f"{run_path}: cannot rebuild the meshes of its scene: {err}") from err
         frames = complete_rows(f)
         if frames == 0:
             raise RunFileError(f"{run_path}: the run has no frame yet")
         time, positions, orientations = (f[k][:frames] for k in ("time", "position", "orientation"))
         displacement = f[DISPLACEMENT][:frames] if DISPLACEMENT in f else None
-    meshes = [b.mesh for b in scene.bodies]
     if positions.shape[1] != len(meshes):
         raise RunFileError(f"{run_path}: {positions.shape[1]} bodies in the frames but {len(meshes)} in its scene")
     return meshes, time, positions, orientations, displacement
