@@ -210,6 +210,9 @@ def run_figure(h5_path):
     side.annotate("wall", (0.01, 0.02), xycoords="axes fraction", fontsize=8)
     height.set(xlabel="t [s]", ylabel="Z: centre height [um]", title="height (dotted: fixed)")
     lateral.set(xlabel="t [s]", ylabel="Y: lateral position [um]", title="lateral position")
+    low, high = lateral.get_ylim()
+    if high - low < 1e-3:  # um: below a nanometre (a cell settling straight down: rounding) reads as no motion
+        lateral.set_ylim(0.5 * (low + high) - 0.5, 0.5 * (low + high) + 0.5)
     _gap_axes(gap, t, gaps)
     side.set(xlabel="X [um]", ylabel="Z [um]",
              title="side view, seen from -Y (to scale; farther in Y drawn behind; dashed: reference point path)")
