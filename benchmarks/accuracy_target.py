@@ -79,7 +79,7 @@ def chosen_for(part: str, gap: float, target: float):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", wb.AccuracyWarning)
         chosen = accuracy.choose_for(bodies, part != "pair", target, unloaded=part == "shear")
-    return chosen, bool(caught)
+    return chosen, any(issubclass(w.category, wb.AccuracyWarning) for w in caught)
 
 
 def check(fronts: list[dict], checked: list[tuple], accuracies) -> list[dict]:

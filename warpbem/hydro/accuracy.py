@@ -328,7 +328,8 @@ def choose(accuracy: float, terms: list[_Term], density_order: int | None = None
     ``scene_costs``."""
     allowed = np.array([density_order in (None, p) for _, p, _ in WALL_MODEL.settings])
     errors, ms, unknowns = scene_costs(terms, extra_unknowns)
-    bounds = errors * np.array([t.model.margin_at(t.gap)[_mapped(t)] for t in terms])
+    with np.errstate(over="ignore"):  # a setting the model extrapolates far off (unusable anyway) bounds to inf
+        bounds = errors * np.array([t.model.margin_at(t.gap)[_mapped(t)] for t in terms])
     allowed &= np.all(np.isfinite(errors), axis=0) & np.isfinite(ms)
     if not allowed.any():
         raise ValueError(f"the error model has no setting of density order {density_order} for this scene")
