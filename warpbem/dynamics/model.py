@@ -101,9 +101,9 @@ class StepPolicy:
 class Model:
     """Bodies (``meshes`` in metres about their reference points, ``fixed`` flags, ``names``),
     the ``flow``, the ``interactions`` switched on (``forces``: Gravity, ExternalLoads,
-    Repulsion, ...; configurations, each checked against the bodies here), the solver options
-    (their context defaults resolved for time stepping, ``SolverOptions.resolved``), the step
-    policy and the scheme ("euler" or "heun").
+    Repulsion, Adhesion, Deformation; configurations, each checked against the bodies here), the
+    solver options, the step policy and the scheme ("euler" or "heun"). The defaults that depend
+    on what is switched on are resolved here (``context_defaults``), for scenes and scripts alike.
 
     Examples
     --------

@@ -137,14 +137,14 @@ class Simulator:
 
     Examples
     --------
+    A free cell 12 um upstream of an adherent one, both 5 um in radius:
+
     >>> import warpbem as wb
-    >>> cell = wb.mesh.sphere(radius=5e-6, subdivisions=2)
-    >>> model = wb.Model([cell, cell], [False, True], wb.Flow(shear_rate=100.0),
-    ...                  interactions=[wb.Gravity([1070.0, 1070.0]), wb.Repulsion()], names=["free", "adherent"])
-    >>> sim = wb.Simulator(model, device="cpu")
-    >>> state = model.initial_state([[-12e-6, 0.0, 6e-6], [0.0, 0.0, 5.25e-6]])
-    >>> state, frame = sim.step(state)      # one step: the next state and its frame
-    >>> state.steps, state.time
+    >>> sphere = wb.mesh.sphere(radius=5e-6, subdivisions=2)
+    >>> pair = wb.Model([sphere, sphere], [False, True], wb.Flow(shear_rate=100.0), names=["free", "adherent"])
+    >>> sim = wb.Simulator(pair, device="cpu")
+    >>> state, frame = sim.step(pair.initial_state([[-12e-6, 0.0, 6e-6], [0.0, 0.0, 5.25e-6]]))
+    >>> state.steps, state.time      # one step: the next state and its frame
     (1, 0.0001)
     >>> round(frame.wall_gap * 1e6, 2), round(frame.closest_body_gap * 1e6, 2)   # um
     (1.0, 2.0)
