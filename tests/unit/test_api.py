@@ -153,3 +153,10 @@ def test_a_scripts_run_file_draws_its_bodies_as_a_scene_files_does(runs):
         assert np.array_equal(meshes[0].elements, cell.elements) and positions.shape == (3, 1, 3)
     with open_result(folder / "python.h5") as f:
         assert "meshes" in f and read_meshes(f)[0].n_elements == 24
+
+
+def test_a_scripts_scene_names_its_bodies_in_errors():
+    cell = wb.mesh.sphere(radius=5.0e-6, subdivisions=1)
+    model = wb.Model([cell, cell], [False, True], names=["free cell", "dome"])
+    with pytest.raises(wb.PlacementError, match="'free cell' and 'dome'"):
+        wb.Scene.of(model, [[0.0, 0.0, 6e-6], [1e-6, 0.0, 6e-6]], end=1e-3)

@@ -71,10 +71,11 @@ def _resumed(output: Path, overrides, given: Scene | None):
 
 
 def _unresumable(table: dict) -> dict:
-    """A scene table less what a resumed run may change (RESUMABLE_KEYS, and frame_interval)."""
+    """A scene table less what a resumed run may change (RESUMABLE_KEYS)."""
     table = json.loads(json.dumps(table))  # a deep copy, tuples as lists as the file has them
-    for key in ("end", "frame_every", "frame_interval"):
-        table.get("time", {}).pop(key, None)
+    for key in RESUMABLE_KEYS:
+        section, name = key.split(".")
+        table.get(section, {}).pop(name, None)
     return table
 
 

@@ -232,8 +232,8 @@ class Scene:
         orientations = (np.tile([1.0, 0.0, 0.0, 0.0], (model.n_bodies, 1)) if orientations is None
                         else np.asarray(orientations, dtype=float))
         run = RunSettings(end=end, scheme=model.scheme, frame_every=frame_every, frame_interval=frame_interval)
-        bodies = tuple(Body(m, position=tuple(p), orientation=tuple(q), fixed=f)
-                       for m, p, q, f in zip(model.meshes, positions, orientations, model.fixed))
+        bodies = tuple(Body(m, position=tuple(p), orientation=tuple(q), fixed=f, name=name)
+                       for m, p, q, f, name in zip(model.meshes, positions, orientations, model.fixed, model.names))
         scene = cls(raw=None, bodies=bodies, model=model, end=run.end, frame_every=run.frame_every,
                     frame_interval=run.frame_interval, sweep={})
         try:
