@@ -126,4 +126,3 @@ class Body:
     def world_nodes(self) -> np.ndarray:
         """(n_nodes, 3) node positions in the world frame, metres."""
         return self.mesh.nodes @ self.rotation().T + self.position
-
