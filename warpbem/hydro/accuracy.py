@@ -162,9 +162,10 @@ def refinement_threshold(k: int, ratio: float) -> float:
 # times. The margins are benchmarks/accuracy_target.py --calibrate's, on a grid of 0.1, from the
 # check's 84 cases (21 per table: h/a 1.02-3 or pair gaps 0.04-4, at 1e-2, 1e-3, 1e-4): at least
 # the 95th percentile of true / estimate over every setting of the front at the table's cases
-# with an estimate within 1e-2 (unrefined 1.14-1.24, refined 1.23-2.09), and large enough that
+# with an estimate within 1e-2 (unrefined 1.14-1.24, refined 1.22-2.00), and large enough that
 # no case of the check is above its accuracy but those the target warns it cannot reach (the
-# shear table's refined 3.6: the case above, true / estimate 4.6).
+# shear table's refined 3.6: the case above, true / estimate 4.6). The wall and pair tables keep
+# the refined 2.1 calibrated before their cells of 16 000-21 000 unknowns were measured (2.0 now).
 MARGINS = {"wall": (1.2, 2.1), "shear": (1.3, 3.6), "fixed": (1.2, 1.3), "pair": (1.2, 2.1)}
 
 # the wall's gap, and half the gap between two bodies for the bilinear density (hydro/geometry.py's
