@@ -24,6 +24,12 @@ from .scene import Scene
 RESUMABLE_KEYS = ("time.end", "time.frame_every")
 
 
+def stored(store) -> str:
+    """The progress line's note of the snapshots read from the disk store (``snapshot_store.py``):
+    " (store 40 read)"; "" with the store off or not looked in yet."""
+    return "" if store is None or not store.hits + store.misses else f" (store {store.hits} read)"
+
+
 def read_state(f, model, row: int) -> State:
     """The state of frame ``row`` of an open run file (``model``: the run's)."""
     parts = {}
@@ -155,7 +161,7 @@ def run(scene, output, overrides=(), device="cpu", resume=False, progress=print,
                 eta = eta_text((scene.end - state.time) / rate) if rate > 0 else "ETA -"
                 report(f"t = {state.time:.6g} / {scene.end:g} s  steps {state.steps}  {steps / elapsed:.2f} steps/s"
                        f"  dt {frame.dt:.2e} s  GMRES {frame.gmres_iterations} ({sim.mobility.operator_description})"
-                       f"  snapshots {sim.hydro.snapshots_solved}  {eta}")
+                       f"  snapshots {sim.hydro.snapshots_solved}{stored(sim.hydro.store)}  {eta}")
         frames = writer.rows
     report(f"done: {steps} steps, t = {t0:g} -> {state.time:g} s simulated in {time.perf_counter() - start:.1f} s;"
            f" {frames} frames in {output}")

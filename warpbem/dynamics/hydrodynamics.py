@@ -33,6 +33,11 @@ pure function of the state (resumed runs reproduce uninterrupted ones). Near con
 lateral lattice is halved for a snapshot until no gap between two bodies moves by more than half
 of it (GAP_SHARE); a snapped configuration that still moves one more, or is not a valid
 placement, is solved exactly.
+
+Lone and pair snapshots (``pairwise.py``) are also kept on disk across runs
+(``snapshot_store.py``, ``SolverOptions.snapshot_store``): one missing here is looked up there
+before it is solved, and written there once solved. The whole system's stay in memory: they are
+keyed by every cell's lattice point and seldom recur in another run.
 """
 
 from __future__ import annotations
@@ -46,6 +51,7 @@ from ..options import OptionError
 from ..surfaces.body import Body
 from ..surfaces.placement import PlacementError, check_placement
 from .pairwise import PairwiseMobility, TooClose
+from .snapshot_store import SnapshotStore, snapshot_digest
 
 PROBE_FORCE = 1e-12  # N: the scale of a basis load's solve (the response is linear)
 MAX_SNAPSHOTS = 256
@@ -150,6 +156,9 @@ class HydrodynamicSolves:
         self._snapshots: OrderedDict = OrderedDict()
         self._pairs: OrderedDict = OrderedDict()
         self.snapshots_solved = 0
+        # lone and pair snapshots on disk across runs (module docstring); None when off
+        self.store = (SnapshotStore((Motion, Responses), size_limit=model.solver.snapshot_store_size)
+                      if model.solver.snapshot_store == "on" else None)
         self.pairwise = None
         if model.solver.grand_mobility == "pairs":
             if model.fixed_mask.any() or not all(self.spherical):
@@ -318,7 +327,8 @@ class HydrodynamicSolves:
 
     def _kept(self, key, snapped, solve, store=None):
         """The snapshot ``key`` from ``store`` (default the whole systems' and lone ones; the
-        pairs' is ``_pairs``), solved at ``snapped`` by ``solve`` and kept if new."""
+        pairs' is ``_pairs``), else, for a lone or pair one, from the disk store; solved at
+        ``snapped`` by ``solve`` and kept (on disk too) if new."""
         store = self._snapshots if store is None else store
         if key in store:
             store.move_to_end(key)
@@ -327,12 +337,30 @@ class HydrodynamicSolves:
             check_placement(snapped, self.model.flow.wall)
         except PlacementError:
             raise TooClose from None
-        snapshot = solve(snapped)
-        self.snapshots_solved += 1
+        lasting = self.store is not None and key[0] in ("lone", "pair")
+        # a solver whose operator form is still open decides it at this solve (and keys it by it): none looked up
+        found = self.store.get(self._digest(key, snapped)) if lasting and self._solver.mode is not None else None
+        snapshot = solve(snapped) if found is None else found
+        if found is None:
+            self.snapshots_solved += 1
+            if lasting:
+                self.store.put(self._digest(key, snapped), snapshot)
         store[key] = snapshot
         while len(store) > (MAX_PAIR_SNAPSHOTS if store is self._pairs else MAX_SNAPSHOTS):
             store.popitem(last=False)
         return snapshot
+
+    def _digest(self, key, snapped) -> str:
+        """The disk store's key of the lone or pair snapshot ``key`` solved at ``snapped``: the radii
+        are those of the model's bodies the key names (a lone key's mesh index, a pair key's two)."""
+        bodies = key[1:2] if key[0] == "lone" else key[1:3]
+        return snapshot_digest(key, snapped, self.model.outer_radii[list(bodies)], self.model.solver,
+                               self.model.flow, PROBE_FORCE, self.mobility.operator_description, self._solver.device)
+
+    @property
+    def _solver(self):
+        """The MobilitySolver of the solves (the near-far split wraps it)."""
+        return getattr(self.mobility, "inner", self.mobility)
 
     def _snapped_apart(self, bodies):
         """(key, bodies) of the whole system's snapshot of ``bodies`` (every model body): on the

@@ -56,6 +56,10 @@ DEFAULT_PAIR_LATERAL = 250e-9
 # flow's motion (benchmarks/many_cells.py --parts cutoff), so every pair of a patch up to 1 mm wide
 # is kept
 DEFAULT_PAIR_CUTOFF = 1e-3
+# bytes: the on-disk store of lone and pair snapshots (dynamics/snapshot_store.py) is capped at this, the
+# least recently used ones evicted beyond it: room for hundreds of thousands of pair snapshots of a few kB
+DEFAULT_SNAPSHOT_STORE_SIZE = 2e9
+SNAPSHOT_STORES = ("on", "off")
 # fixed cells from which "auto" switches the near-far split on: per step on the crossing path
 # (benchmarks/frozen.py steps --counts 1 2 3 4 5 --full; docs/figures/frozen_steps_notes.md) the
 # split cost as much as the full solve up to 4 x 4 domes (2.11 against 2.12 s at 16) and 35-40 %
@@ -184,6 +188,12 @@ class SolverOptions:
                                  "m", low=0.0, high=1e-5, low_open=True)
     pair_cutoff: float = option(DEFAULT_PAIR_CUTOFF, "with grand_mobility = 'pairs', pairs of cells farther apart"
                                 " along the wall than this do not interact", "m", low=0.0, high=1e-2)
+    snapshot_store: str = option("on", "keep the lone and pair snapshots on disk across runs: another seed, scene or"
+                                 " resumed run of the same cells and settings reads them instead of solving them. In"
+                                 " the folder WARPBEM_SNAPSHOT_STORE, else snapshots/ in the kernel cache's"
+                                 " (.warp_cache or WARPBEM_CACHE); docs/adhesion.md", choices=SNAPSHOT_STORES)
+    snapshot_store_size: float = option(DEFAULT_SNAPSHOT_STORE_SIZE, "the snapshot store's cap on disk: beyond it the"
+                                        " least recently used snapshots are evicted", "B", low=1e6, high=1e13)
     near_far_split: str = option("auto", "time stepping: the adherent cells' background solved once, each solve"
                                  " holding the free cells and the adherent cells near them (hydro/frozen.py): on,"
                                  f" off, or auto: on with at least {NEAR_FAR_FIXED_CELLS} fixed cells"
