@@ -90,6 +90,19 @@ def test_a_snapshot_read_back_is_the_solved_one_bit_for_bit(snapshot_store):
     assert first.store.folder == snapshot_store  # the test's own store, never the developer's
 
 
+def test_a_solver_whose_operator_is_still_open_looks_nothing_up_and_keys_by_the_one_it_decides():
+    """The operator's form ("auto") is decided at a solver's first solve when it is built without
+    the model's unknowns, and it is in the key: such a solver's first snapshot is solved, not looked
+    up, and written under the form its solve decided, where a solver decided from the start finds it."""
+    first = solves()
+    first.mobility = build_solver(first.model.solver, first.model.flow, "cpu")  # no unknowns: "auto" still open
+    solved = lone(first)
+    assert (first.mobility.mode, first.store.misses, first.store.writes) == ("dense", 0, 1)
+    decided = solves()
+    assert_same(lone(decided), solved)
+    assert decided.store.hits == 1 and decided.snapshots_solved == 0
+
+
 def digest(key=SNAPSHOT_KEY, mesh=MESH, radii=(A,), options=None, flow=Flow(100.0, 1e-3), probe=PROBE_FORCE,
            form="dense", position=(0.0, 0.0, 1118 * SPACING)):
     options = options or SolverOptions(reuse_tolerance=SPACING).resolved(time_stepping=True, bonds=True)

@@ -338,10 +338,10 @@ class HydrodynamicSolves:
         except PlacementError:
             raise TooClose from None
         lasting = self.store is not None and key[0] in ("lone", "pair")
-        # a solver whose operator form is still open decides it at this solve (and keys it by it): none looked up
-        found = self.store.get(self._digest(key, snapped)) if lasting and self._solver.mode is not None else None
-        snapshot = solve(snapped) if found is None else found
-        if found is None:
+        # a solver whose operator form is still open decides it at this solve, and keys the entry by it
+        snapshot = self.store.get(self._digest(key, snapped)) if lasting and self._solver.mode is not None else None
+        if snapshot is None:
+            snapshot = solve(snapped)
             self.snapshots_solved += 1
             if lasting:
                 self.store.put(self._digest(key, snapped), snapshot)
