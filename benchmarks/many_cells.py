@@ -330,6 +330,40 @@ def lattice_error(device, distances, bases, k):
     return rows
 
 
+def far_error(device, distances, k):
+    """The far field's error on two cells (far_field.py: each cell's traction moments with the
+    wall's images) against their pair snapshot (the direct two-body solve, exact for two cells),
+    at ``distances`` along a line 30 degrees off the flow, heights REST and REST + 13 nm; the
+    coupling itself (the cells alone against the direct solve) for scale, and the part the first
+    reflection leaves out on each cell's own block (the grand mobility's diagonal blocks of the
+    direct solve against the cells alone)."""
+    mesh = wb.mesh.sphere(A, k)
+    direction = np.array([np.cos(np.pi / 6), np.sin(np.pi / 6)])
+    rows, progress = [], Progress(len(distances))
+    far = solves(mesh, 2, device, **EXACT, grand_mobility="pairs", near_radius=1e-9)
+    alone = solves(mesh, 2, device, **EXACT, grand_mobility="pairs", pair_cutoff=0.0)
+    direct_solves = solves(mesh, 2, device)
+    for distance in distances:
+        bodies = [Body(mesh, position=(0.0, 0.0, REST)), Body(mesh, position=(*(distance * direction), REST + 13e-9))]
+        t = time.perf_counter()
+        exact = motion(Motion.of(direct_solves.mobility.solve(bodies)), direct_solves._grand_mobility(bodies))
+        pair_s = time.perf_counter() - t
+        t = time.perf_counter()
+        modelled = motion(*far._snapshot(bodies))
+        far_s = time.perf_counter() - t
+        cells_alone = motion(*alone._snapshot(bodies))
+        own = np.zeros_like(exact[0], dtype=bool)
+        own[:6, :6] = own[6:, 6:] = True
+        rows.append(dict(distance_um=distance * 1e6, coupling_grand=change(cells_alone, exact)[0],
+                         coupling_flow=change(cells_alone, exact)[1], far_grand=change(modelled, exact)[0],
+                         far_flow=change(modelled, exact)[1],
+                         own_blocks=np.abs((cells_alone[0] - exact[0])[own]).max() / np.abs(exact[0]).max(),
+                         pair_snapshot_s=pair_s, far_s=far_s))
+        print_table([rows[-1]])
+        progress.done(f"far field: {distance * 1e6:g} um apart")
+    return rows
+
+
 def visited_points(path, interaction=20e-9):
     """(points the interpolation visits, points the nearest-point rule visits, pairs, frames) of
     a run's frames (module docstring, 1d): lattice points as (heights, spacing, point) of each
@@ -545,7 +579,7 @@ def main():
     parser = arguments(__doc__)
     parser.add_argument("--parts", nargs="+", default=["accuracy"],
                         choices=["accuracy", "resistance", "cutoff", "lattice", "reuse", "factors", "batch", "cost",
-                                 "implicit"])
+                                 "implicit", "far"])
     parser.add_argument("--runs", nargs="*", default=[], help="run files for --parts reuse")
     parser.add_argument("--k", type=int, default=2, help="sphere mesh subdivisions")
     parser.add_argument("--cells", nargs="*", type=int, default=[],
@@ -580,6 +614,11 @@ def main():
                                                                             [125e-9, 250e-9, 500e-9, 1e-6])
         rows = lattice_error(args.device, distances, bases, args.k)
         print(f"wrote {write_csv('many_cells_lattice.csv', rows)}")
+    if "far" in args.parts:
+        distances = [25e-6, 50e-6] if args.quick else [12e-6, 15e-6, 20e-6, 25e-6, 30e-6, 35e-6, 40e-6, 50e-6, 75e-6,
+                                                       100e-6, 150e-6, 200e-6]
+        rows = far_error(args.device, distances, args.k)
+        print(f"wrote {write_csv('many_cells_far.csv', rows)}")
     if "reuse" in args.parts:
         rows, progress = [], Progress(len(args.runs))
         for path in args.runs:

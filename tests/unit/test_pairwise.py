@@ -133,12 +133,13 @@ def test_the_coarse_remainder_brings_the_pairs_of_a_patch_to_the_whole_system():
     On 2 x 2 cells five radii apart, against the whole system's direct solve on the same mesh,
     the pairs err by 8.9e-4 / 7.9e-4 (grand mobility / flow's motion) and with the remainder by
     8.7e-5 / 1.3e-4 (10 and 6 times less). Every solve but the coarse one refined with contact
-    ratio 1, as benchmarks/many_cells.py --refinement 1, to keep the test short."""
+    ratio 1, as benchmarks/many_cells.py --refinement 1, to keep the test short; every pair from
+    its snapshot (no far field: the diagonal pair is 7.07 radii apart)."""
     bodies = patch(2)
     hydro = solves(4, contact_refinement=1.0)
     direct = motion(Motion.of(hydro.mobility.solve(bodies)), hydro._grand_mobility(bodies))
     pairs, corrected = (relative_change(motion(*solves(4, **EXACT, grand_mobility="pairs", contact_refinement=1.0,
-                                                       many_body=mode)._snapshot(bodies)), direct)
+                                                       far_field="none", many_body=mode)._snapshot(bodies)), direct)
                         for mode in ("none", "coarse"))
     assert pairs[1] > 5e-4  # the part the pairs leave out, which the check would miss
     assert corrected[0] < pairs[0] / 5 and corrected[1] < pairs[1] / 5
@@ -230,11 +231,11 @@ def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_pa
     scene = PAIRS_SCENE.replace("count = [2, 1]", f"count = [{count[0]}, {count[1]}]")
     if many_body != "none":
         scene = scene.replace('grand_mobility = "pairs"', f'grand_mobility = "pairs"\nmany_body = "{many_body}"')
-    if count != (2, 1):  # four or sixteen cells, each coupled to its nearest neighbours (the pairs 10 um apart) on
-        # coarser lattices (2 um at 10 um, heights to 200 nm): few pair snapshots
+    if count != (2, 1):  # four or sixteen cells, each with pair snapshots of its nearest neighbours (the pairs 10 um
+        # apart) on coarser lattices (2 um at 10 um, heights to 200 nm), the farther pairs from the far field
         scene = scene.replace("pitch = [10.0e-6, 0.0]", f"pitch = [{pitch[0]}, {pitch[1]}]").replace(
             'grand_mobility = "pairs"',
-            'grand_mobility = "pairs"\npair_lateral = 2.0e-6\npair_cutoff = 1.2e-5\nreuse_interaction = 2.0e-7')
+            'grand_mobility = "pairs"\npair_lateral = 2.0e-6\nnear_radius = 1.2e-5\nreuse_interaction = 2.0e-7')
     path.write_text(scene)
     run.run(path, tmp_path / "straight.h5", progress=lambda line: None)
     if count == (2, 1):  # the same seed's rerun on two cells (the kept rows are tested bit for bit above)

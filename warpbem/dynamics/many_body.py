@@ -72,7 +72,8 @@ class ManyBodyRemainder:
         radii = model.outer_radii
         meshes = {r: sphere(r, COARSE_SUBDIVISIONS) for r in np.unique(radii)}
         tiny = self.lateral / PAIR_LATTICE_SHARE
-        options = replace(model.solver.without_accuracy(), many_body="none", contact_refinement=COARSE_REFINEMENT,
+        options = replace(model.solver.without_accuracy(), many_body="none", far_field="none",
+                          contact_refinement=COARSE_REFINEMENT,
                           reuse_tolerance=tiny, reuse_interaction=tiny, reuse_lateral=None, pair_lateral=tiny)
         coarse = Model([meshes[r] for r in radii], [False] * len(radii), model.flow, solver=options)
         self.coarse = type(hydro)(coarse, build_solver(coarse.solver, coarse.flow, hydro.mobility.device))

@@ -53,7 +53,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..hydro.options import NEAR_RADII
 from ..surfaces.body import Body
+from .far_field import FarField
 from .many_body import ManyBodyRemainder
 
 # y -> -y: a (basis) load's force keeps x, z and its torque (a pseudovector) keeps y; the
@@ -169,6 +171,8 @@ class PairwiseMobility:
         # which of its points' rows were looked up (P, 4), those rows (P, 4, row))
         self._squares = None
         self.remainder = ManyBodyRemainder(hydro) if model.solver.many_body == "coarse" else None
+        self.far = FarField(hydro) if model.solver.far_field == "moments" else None
+        self.near_radius = model.solver.near_radius
 
     def assemble(self, bodies):
         """(flow velocity, angular velocity (n, 3); basis velocity, angular velocity (6n, n, 3),
@@ -200,12 +204,18 @@ class PairwiseMobility:
         positions = np.array([body.position for body in bodies])
         first, second = np.triu_indices(n, 1)
         offsets = positions[second, :2] - positions[first, :2]
-        within = np.hypot(offsets[:, 0], offsets[:, 1]) <= self.cutoff
-        first, second, offsets = first[within], second[within], offsets[within]
-        rows = self._pair_rows(bodies, first, second, offsets)
+        distance = np.hypot(offsets[:, 0], offsets[:, 1])
+        within = distance <= self.cutoff
+        first, second, offsets, distance = first[within], second[within], offsets[within], distance[within]
+        near = self._near(first, second, distance)
+        rows = np.zeros((len(first), sum(PART_SIZES)))
+        if np.any(near):
+            rows[near] = self._pair_rows(bodies, first[near], second[near], offsets[near])
+        if not np.all(near):  # the far pairs add their coupling to the cells alone (far_field.py)
+            rows[~near] = self.far.rows(bodies, first[~near], second[~near], offsets[~near])
         flow_v, flow_w, grand_v, grand_w = (part.reshape((-1,) + shape) for part, shape in
                                             zip(np.split(rows, np.cumsum(PART_SIZES)[:-1], axis=1), PART_SHAPES))
-        count, cells = len(first), (first, second)
+        count = len(first)
         velocity = summed(first, flow_v[:, 0], n) + summed(second, flow_v[:, 1], n)
         angular = summed(first, flow_w[:, 0], n) + summed(second, flow_w[:, 1], n)
         # (loaded cell, responding cell, load component, 3); a pair's loads on one cell and the
@@ -216,8 +226,9 @@ class PairwiseMobility:
             g = grand.reshape(count, 2, 6, 2, 3)  # (pair, loaded cell, load component, responding cell, 3)
             by_cells[first, second], by_cells[second, first] = g[:, 0, :, 1], g[:, 1, :, 0]
             by_cells[np.arange(n), np.arange(n)] = summed(first, g[:, 0, :, 0], n) + summed(second, g[:, 1, :, 1], n)
-        # each cell's lone snapshot at its pair height, once per pair it is in
-        pairs_of = np.bincount(np.concatenate(cells), minlength=n)
+        # each cell's lone snapshot at its pair height, once per near pair it is in (a far pair's rows
+        # hold the coupling alone)
+        pairs_of = np.bincount(np.concatenate([first[near], second[near]]), minlength=n)
         for b in np.flatnonzero(pairs_of):
             lone_flow, lone_grand = self.hydro._lone(b, bodies[b], self.hydro.interaction, exact_if_too_close=True)
             velocity[b] -= pairs_of[b] * lone_flow.velocity[0]
@@ -226,6 +237,16 @@ class PairwiseMobility:
             by_cells_w[b, b] -= pairs_of[b] * lone_grand.angular_velocity[:, 0]
         basis_velocity, basis_angular = (a.transpose(0, 2, 1, 3).reshape(6 * n, n, 3) for a in (by_cells_v, by_cells_w))
         return velocity, angular, basis_velocity, basis_angular
+
+    def _near(self, first, second, distance) -> np.ndarray:
+        """(P,) which of the pairs at lateral ``distance`` (m) take pair snapshots: all without a
+        far field, else those within near_radius (default NEAR_RADII mean outer radii)."""
+        if self.far is None:
+            return np.ones(len(first), bool)
+        radius = self.near_radius
+        if radius is None:
+            radius = NEAR_RADII * 0.5 * (self.radii[first] + self.radii[second])
+        return distance <= radius
 
     def _pair_rows(self, bodies, first, second, offsets) -> np.ndarray:
         """(P, row) the snapshots of the pairs (first[p], second[p]) at ``offsets`` (m, of the

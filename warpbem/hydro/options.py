@@ -59,6 +59,10 @@ DEFAULT_PAIR_CUTOFF = 1e-3
 # bytes: the on-disk store of lone and pair snapshots (dynamics/snapshot_store.py) is capped at this, the
 # least recently used ones evicted beyond it: room for hundreds of thousands of pair snapshots of a few kB
 DEFAULT_SNAPSHOT_STORE_SIZE = 2e9
+FAR_FIELDS = ("moments", "none")
+# pairs of cells farther apart than this many mean outer radii are far (dynamics/far_field.py):
+# measured on two 5 um cells at the rolling height (benchmarks/many_cells.py --parts far)
+NEAR_RADII = 7.0
 SNAPSHOT_STORES = ("on", "off")
 # fixed cells from which "auto" switches the near-far split on: per step on the crossing path
 # (benchmarks/frozen.py steps --counts 1 2 3 4 5 --full; docs/figures/frozen_steps_notes.md) the
@@ -188,6 +192,15 @@ class SolverOptions:
                                  "m", low=0.0, high=1e-5, low_open=True)
     pair_cutoff: float = option(DEFAULT_PAIR_CUTOFF, "with grand_mobility = 'pairs', pairs of cells farther apart"
                                 " along the wall than this do not interact", "m", low=0.0, high=1e-2)
+    far_field: str = option("moments", "with grand_mobility = 'pairs', the pairs farther apart than near_radius:"
+                            " 'moments' couples them through each cell's surface traction alone above the wall,"
+                            " compressed to its moments to second order, with the wall's images (the first"
+                            " reflection; dynamics/far_field.py), with no pair snapshot; 'none' takes every pair"
+                            " within pair_cutoff from pair snapshots", choices=FAR_FIELDS)
+    near_radius: float | None = option(None, "with far_field = 'moments', pairs farther apart along the wall than this"
+                                       " are far. Default: NEAR_RADII x the mean outer radius of the two"
+                                       f" ({NEAR_RADII:g}: 35 um between 5 um cells; docs/many-cells.md)", "m",
+                                       kind=float, low=0.0, high=1e-2, low_open=True)
     snapshot_store: str = option("on", "keep the lone and pair snapshots on disk across runs: another seed, scene or"
                                  " resumed run of the same cells and settings reads them instead of solving them. In"
                                  " the folder WARPBEM_SNAPSHOT_STORE, else snapshots/ in the kernel cache's"
