@@ -4,7 +4,9 @@
    height (heights spread by +-20 nm) against the whole system's solve, in the norm of
    ``benchmarks/adhesion.py`` part 2c (largest change over largest entry), from
    - the pairs (``[solver] grand_mobility = "pairs"``, dynamics/pairwise.py) at the cells' own
-     positions ("pairwise": the approximation alone) and on the default lattices ("pairs_lattices");
+     positions, every pair from its snapshot ("pairwise": the approximation alone), the pairs
+     beyond the near radius from the far field ("pairs_far", dynamics/far_field.py: the
+     solver's default), and on the default lattices ("pairs_lattices");
    - the pairs with ``[solver] many_body = "coarse"`` (dynamics/many_body.py) at the cells' own
      positions ("pairs_remainder": its remainder on its lattice, 1 um, heights rounded up to 50 nm);
    - the pairs at the cells' own positions plus the many-body remainder of a coarse mesh: its
@@ -25,7 +27,11 @@
    rule for lubrication), both from direct solves of each cell alone and each pair alone,
    against the whole system's solve, on the accuracy part's cases;
 1b. cut-off: the error of leaving out pairs beyond 50-150 um on an 8 x 8 patch 25 um apart,
-   against every pair;
+   against every pair (all from pair snapshots, no far field);
+1b'. far: two cells at 12-200 um along a line 30 degrees off the flow, each alone plus the far
+   field between them (far_field.py: the first reflection from each cell's traction moments),
+   against their direct two-body solve, with the coupling itself and the part left out on each
+   cell's own block (the second reflection) beside it: where the near radius sits;
 1c. lattice: two cells (where the pairs are exact) at 12.5-40 um along a line 30 degrees off the
    flow, the pair's snapshot interpolated bilinearly between the points of its lattice (as the
    pairs do) and taken from the nearest point instead, against the direct solve, for lattices of
@@ -53,10 +59,10 @@
    GMRES on (I + dt A Q) s = b, products O(p^2)) and from the matrix formed and factored by
    Cholesky (O(p^3), before it), interleaved cell count by cell count.
 
-    python benchmarks/many_cells.py [--parts accuracy resistance cutoff lattice reuse factors batch cost implicit]
+    python benchmarks/many_cells.py [--parts accuracy resistance cutoff far lattice reuse factors batch cost implicit]
         [--runs RUN.h5 ...] [--quick]
         [--cells N ...] [--system-cells N ...] [--remainder-cells N ...] [--cases KIND:N:UM ...]
-        [--refinement R] [--device cuda:0]
+        [--refinement R] [--solver-paths] [--device cuda:0]
 
 On a GPU, benchmarks/device_many_cells.sh measures the 8 x 8 patch's step on CUDA and on that
 machine's CPU side by side (part 2).
@@ -177,9 +183,11 @@ def local_remainder(device, positions, coarse_k, options, radius):
     return (0.5 * (q + q.T), u), wall, largest
 
 
-def accuracy(device, cases, k, refinement=None):
+def accuracy(device, cases, k, refinement=None, extras=True):
     """Part 1 on ``cases`` ((arrangement, cells, spacing)), every solve but the coarse remainders'
-    on the k sphere refined with ``refinement`` (default: the time-stepped models' 3)."""
+    on the k sphere refined with ``refinement`` (default: the time-stepped models' 3); without
+    ``extras`` the solver's own paths only (no coarse remainders at other refinements, no local
+    clusters)."""
     mesh = wb.mesh.sphere(A, k)
     fine = {} if refinement is None else dict(contact_refinement=refinement)
     rows, progress = [], Progress(len(cases))
@@ -193,7 +201,8 @@ def accuracy(device, cases, k, refinement=None):
         row = dict(arrangement=kind, cells=n, spacing_um=spacing * 1e6, k=k,
                    refinement=hydro.model.solver.contact_refinement, system_s=t_system)
         approximations = {}
-        for name, options in (("pairwise", dict(EXACT, grand_mobility="pairs")),
+        for name, options in (("pairwise", dict(EXACT, grand_mobility="pairs", far_field="none")),
+                              ("pairs_far", dict(EXACT, grand_mobility="pairs")),
                               ("pairs_lattices", dict(reuse_tolerance=2e-9, grand_mobility="pairs")),
                               ("pairs_remainder", dict(EXACT, grand_mobility="pairs", many_body="coarse"))):
             pairs = solves(mesh, n, device, **options, **fine)
@@ -205,6 +214,12 @@ def accuracy(device, cases, k, refinement=None):
         approximations["alone"] = motion(*solves(mesh, n, device, **EXACT, grand_mobility="pairs", pair_cutoff=0.0,
                                                  **fine)._snapshot(bodies))
         pairwise_grand, pairwise_flow = approximations["pairwise"]
+        row["alone_grand"], row["alone_flow"] = change(approximations["alone"], exact)
+        if not extras:
+            rows.append(row)
+            print_table([row])
+            progress.done(f"accuracy: {kind} of {n} cells, {spacing * 1e6:g} um apart")
+            continue
         for name, ratio in COARSE_REMAINDERS.items():  # added to the pairs at the cells' own positions
             if ratio >= row["refinement"]:
                 continue  # no coarser than the reference itself
@@ -220,7 +235,6 @@ def accuracy(device, cases, k, refinement=None):
                                                        LOCAL_RADIUS * spacing)
         row["local_0_grand"], row["local_0_flow"] = change((pairwise_grand + grand, pairwise_flow + flow), exact)
         row["local_0_s"], row["local_largest_cluster"] = wall, largest
-        row["alone_grand"], row["alone_flow"] = change(approximations["alone"], exact)
         rows.append(row)
         print_table([row])
         progress.done(f"accuracy: {kind} of {n} cells, {spacing * 1e6:g} um apart")
@@ -292,7 +306,7 @@ def cutoff_error(device, side, spacing, cutoffs, k):
     positions = arrangement("patch", n, spacing)
     positions[:, 2] = REST
     bodies = [Body(mesh, position=p) for p in positions]
-    hydro = solves(mesh, n, device, reuse_tolerance=2e-9, grand_mobility="pairs", pair_cutoff=1e-2)
+    hydro = solves(mesh, n, device, reuse_tolerance=2e-9, grand_mobility="pairs", pair_cutoff=1e-2, far_field="none")
     every = motion(*hydro._snapshot(bodies))
     rows, progress = [], Progress(len(cutoffs))
     for cutoff in cutoffs:  # the same pair snapshots, fewer of them summed
@@ -592,6 +606,8 @@ def main():
     parser.add_argument("--refinement", type=float, default=None,
                         help="--parts accuracy: the contact refinement of every solve but the coarse remainders'"
                              " (default 3, the time-stepped models')")
+    parser.add_argument("--solver-paths", action="store_true",
+                        help="--parts accuracy: the solver's own paths only (pairs, far field, lattices, remainder)")
     parser.add_argument("--system-cells", nargs="*", type=int, default=None,
                         help="the counts of --parts cost solved as whole systems too (default 3)")
     args = parser.parse_args()
@@ -600,7 +616,7 @@ def main():
                  [("line", 3, 12e-6), ("line", 3, 25e-6), ("patch", 4, 25e-6), ("patch", 9, 25e-6)])
         if args.cases:
             cases = [(kind, int(n), float(um) * 1e-6) for kind, n, um in (c.split(":") for c in args.cases)]
-        rows = accuracy(args.device, cases, args.k, args.refinement)
+        rows = accuracy(args.device, cases, args.k, args.refinement, extras=not args.solver_paths)
         print(f"wrote {write_csv('many_cells_accuracy.csv', rows)}")
     if "resistance" in args.parts:
         cases = [("line", 3, 25e-6)] if args.quick else [("line", 3, 12e-6), ("line", 3, 25e-6), ("patch", 4, 25e-6)]

@@ -18,15 +18,20 @@ which the near radius leaves to the pair snapshots.
 
 Each cell's tractions come from seven solves of the cell alone above the wall
 (``hydro/traction.py``): a unit force and torque along each axis, and the ambient flow with no
-load, at its height rounded up to HEIGHT_LATTICE (cells sharing a mesh share them). Far from the
-cell its traction is felt through its moments about the centre; they are kept to second order
-(force, torque and stresslet, and the second moments that carry the wall's r^-4 terms) on a
-stencil of STENCIL_POINTS point forces at STENCIL_RADIUS, the force and torque set to their exact
-values (the load itself, or none in the flow) so that no discretisation error of the traction
-turns into a spurious Stokeslet. A pair then costs 19 x 19 evaluations of G in one Warp kernel
-(``kernels/far_field.py``) over all far pairs; a pair is evaluated again only when its cells'
-height sets or its offset on the lateral lattice FAR_LATERAL change, so the coupling is a function
-of the state alone (resumed runs repeat uninterrupted ones).
+load, at its height on the pair snapshots' height lattice (``reuse_interaction``; cells sharing a
+mesh share them). Far from the cell its traction is felt through its moments about the centre;
+they are kept to second order (force, torque and stresslet, and the second moments that carry
+the wall's r^-4 terms) on a stencil of STENCIL_POINTS point forces at STENCIL_RADIUS, the force and
+torque set to their exact values (the load itself, or none in the flow) so that no discretisation
+error of the traction turns into a spurious Stokeslet. A pair then costs 19 x 19 evaluations of G
+in one Warp kernel (``kernels/far_field.py``) over the far pairs; a pair is evaluated again only
+when its cells' heights on that lattice or its offset on the lateral lattice FAR_LATERAL change,
+so the coupling is a function of the state alone (resumed runs repeat uninterrupted ones).
+
+Against the direct two-body solve (``tests/unit/test_far_field.py``; 2 um cells, k = 2): far
+apart the coupling is Blake's far field of the cells' first moments to 6 %; at 7 radii the pair
+errs by 4.1e-4 of the grand mobility, at 10 radii by 1.7e-4, where the coupling is 30-40 times
+larger.
 """
 
 from __future__ import annotations

@@ -61,8 +61,11 @@ DEFAULT_PAIR_CUTOFF = 1e-3
 DEFAULT_SNAPSHOT_STORE_SIZE = 2e9
 FAR_FIELDS = ("moments", "none")
 # pairs of cells farther apart than this many mean outer radii are far (dynamics/far_field.py):
-# measured on two 5 um cells at the rolling height (benchmarks/many_cells.py --parts far)
-NEAR_RADII = 7.0
+# measured on two 5 um cells at the rolling height (benchmarks/many_cells.py --parts far): at 7 and
+# 8 radii (35, 40 um) the pair errs by 4.4e-4 and 1.6e-4 of the grand mobility, most of it the second
+# reflection on each cell's own block, which adds over the neighbours around a cell (4 diagonal
+# ones 35.4 um apart in a patch 25 um apart)
+NEAR_RADII = 8.0
 SNAPSHOT_STORES = ("on", "off")
 # fixed cells from which "auto" switches the near-far split on: per step on the crossing path
 # (benchmarks/frozen.py steps --counts 1 2 3 4 5 --full; docs/figures/frozen_steps_notes.md) the
@@ -199,7 +202,7 @@ class SolverOptions:
                             " within pair_cutoff from pair snapshots", choices=FAR_FIELDS)
     near_radius: float | None = option(None, "with far_field = 'moments', pairs farther apart along the wall than this"
                                        " are far. Default: NEAR_RADII x the mean outer radius of the two"
-                                       f" ({NEAR_RADII:g}: 35 um between 5 um cells; docs/many-cells.md)", "m",
+                                       f" ({NEAR_RADII:g}: 40 um between 5 um cells; docs/many-cells.md)", "m",
                                        kind=float, low=0.0, high=1e-2, low_open=True)
     snapshot_store: str = option("on", "keep the lone and pair snapshots on disk across runs: another seed, scene or"
                                  " resumed run of the same cells and settings reads them instead of solving them. In"
