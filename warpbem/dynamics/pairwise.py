@@ -179,11 +179,9 @@ class PairwiseMobility:
         iterations, residual) of the free ``bodies``: each cell's lone snapshot at its fine
         height, plus the pairs' part, plus the many-body remainder if asked for
         (``many_body.py``)."""
-        hydro = self.hydro
         velocity, angular, basis_velocity, basis_angular = self._pairs_part(bodies)
         iterations, residual = 0, 0.0
-        for b, body in enumerate(bodies):
-            flow, grand = hydro._lone(b, body, hydro.tolerance, exact_if_too_close=True)
+        for b, (flow, grand) in self._lone_snapshots(bodies, self.hydro.tolerance).items():
             velocity[b] += flow.velocity[0]
             angular[b] += flow.angular_velocity[0]
             rows = slice(6 * b, 6 * b + 6)
@@ -229,14 +227,32 @@ class PairwiseMobility:
         # each cell's lone snapshot at its pair height, once per near pair it is in (a far pair's rows
         # hold the coupling alone)
         pairs_of = np.bincount(np.concatenate([first[near], second[near]]), minlength=n)
-        for b in np.flatnonzero(pairs_of):
-            lone_flow, lone_grand = self.hydro._lone(b, bodies[b], self.hydro.interaction, exact_if_too_close=True)
+        lone = self._lone_snapshots(bodies, self.hydro.interaction, np.flatnonzero(pairs_of))
+        for b, (lone_flow, lone_grand) in lone.items():
             velocity[b] -= pairs_of[b] * lone_flow.velocity[0]
             angular[b] -= pairs_of[b] * lone_flow.angular_velocity[0]
             by_cells_v[b, b] -= pairs_of[b] * lone_grand.velocity[:, 0]
             by_cells_w[b, b] -= pairs_of[b] * lone_grand.angular_velocity[:, 0]
         basis_velocity, basis_angular = (a.transpose(0, 2, 1, 3).reshape(6 * n, n, 3) for a in (by_cells_v, by_cells_w))
         return velocity, angular, basis_velocity, basis_angular
+
+    def _lone_snapshots(self, bodies, spacing: float, cells=None):
+        """{cell: its lone snapshot} of ``cells`` (default all) at their heights snapped to ``spacing`` (``HydrodynamicSolves._lone``), looked up once per
+        mesh and lattice height: the cells of a patch share a few. A height too near the wall for
+        the lattice is solved as it is, cell by cell."""
+        hydro = self.hydro
+        cells = range(len(bodies)) if cells is None else cells
+        heights = np.round(np.array([bodies[b].position[2] for b in cells]) / spacing).tolist()
+        shared, found = {}, {}
+        for b, height in zip(cells, heights):
+            key = (hydro.lone_of[b], height)
+            if key not in shared:
+                try:
+                    shared[key] = hydro._lone(b, bodies[b], spacing)
+                except TooClose:
+                    shared[key] = None
+            found[b] = shared[key] or hydro._lone(b, bodies[b], spacing, exact_if_too_close=True)
+        return found
 
     def _near(self, first, second, distance) -> np.ndarray:
         """(P,) which of the pairs at lateral ``distance`` (m) take pair snapshots: all without a
