@@ -17,8 +17,8 @@ import pytest
 import warpbem as wb
 from warpbem.dynamics.hydrodynamics import PROBE_FORCE, HydrodynamicSolves
 from warpbem.dynamics.model import Flow, Model, SolverOptions, build_solver
-from warpbem.dynamics.snapshot_store import (ENVIRONMENT, FORMAT, HEADER, MAGIC, SnapshotStore, SnapshotStoreWarning,
-                                             snapshot_digest)
+from warpbem.dynamics.snapshot_store import (ENVIRONMENT, FORMAT, HEADER, MAGIC, SnapshotStore, SnapshotStoreError,
+                                             SnapshotStoreWarning, snapshot_digest)
 from warpbem.surfaces.body import Body
 
 A = 2e-6
@@ -195,6 +195,15 @@ def test_a_bad_entry_is_deleted_and_solved_again_never_used(snapshot_store, rng,
     assert_same(lone(reader), fresh)
     assert (reader.store.hits, reader.store.rejected, reader.snapshots_solved) == (1, 0, 0)
 
+
+
+def test_a_store_that_cannot_be_opened_says_where_and_how_to_do_without_it(tmp_path):
+    (tmp_path / "a file").write_text("not a folder")
+    store = SnapshotStore((), tmp_path / "a file")
+    with pytest.raises(SnapshotStoreError, match=r"the snapshot store .*a file cannot be opened .*set"
+                                                 r" WARPBEM_SNAPSHOT_STORE to a writable folder, or \[solver\]"
+                                                 r' snapshot_store = "off"'):
+        store.get(key_of(0))
 
 
 @dataclasses.dataclass(frozen=True)

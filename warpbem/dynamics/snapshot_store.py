@@ -15,7 +15,7 @@ The key of an entry is a sha256 over everything a snapshot's numbers depend on, 
 
 * FORMAT (the layout of an entry), warpbem's version and a digest of the package's own source
   (warpbem/ and its kernels): the version stays the same from one commit to the next while the
-  numerics change;
+  numerics change. So in a checkout any edit of the package starts the store afresh;
 * the snapshot's key in the run (its kind, the mesh's index in the model, the lattice heights,
   spacing and offset): which snapshot of the model it is;
 * the bodies it is solved at: each mesh's node coordinates and connectivity (the index names a
@@ -36,7 +36,9 @@ Not in it: the run's history. A pair's flow solve starts GMRES from the previous
 and its preconditioner may take the factors of an equal block of another position
 (``hydro/block_factors.py``), so the same pair snapshot solved after others differs from a fresh
 one by about 1e-11 of the flow's motion (within the GMRES tolerance). A run that reads a snapshot
-gets the numbers of the run that solved it: a scene run twice gives the same frames bit for bit.
+gets the numbers of the run that solved it: a scene whose hydrodynamics all come from lone and pair
+snapshots gives the same frames bit for bit when run again; one whose other solves start GMRES from
+a snapshot's solution (the whole system's snapshots) repeats them to round-off.
 
 An entry is a header (MAGIC, FORMAT, the key's digest, the payload's sha256 and length) and a
 payload: the snapshot's arrays as NumPy's .npz, read without pickle. An entry that is truncated,
