@@ -18,15 +18,18 @@ which the near radius leaves to the pair snapshots.
 
 Each cell's tractions come from seven solves of the cell alone above the wall
 (``hydro/traction.py``): a unit force and torque along each axis, and the ambient flow with no
-load, at its height on the pair snapshots' height lattice (``reuse_interaction``; cells sharing a
-mesh share them). Far from the cell its traction is felt through its moments about the centre;
+load, at the heights of the pair snapshots' height lattice (``reuse_interaction``; cells sharing a
+mesh share them), interpolated linearly to the cell's own height between the two around it (the
+coupling is linear in each cell's tractions, so a pair is the bilinear blend of its four height
+combinations). Far from the cell its traction is felt through its moments about the centre;
 they are kept to second order (force, torque and stresslet, and the second moments that carry
 the wall's r^-4 terms) on a stencil of STENCIL_POINTS point forces at STENCIL_RADIUS, the force and
 torque set to their exact values (the load itself, or none in the flow) so that no discretisation
 error of the traction turns into a spurious Stokeslet. A pair then costs 19 x 19 evaluations of G
-in one Warp kernel (``kernels/far_field.py``) over the far pairs; a pair is evaluated again only
-when its cells' heights on that lattice or its offset on the lateral lattice FAR_LATERAL change,
-so the coupling is a function of the state alone (resumed runs repeat uninterrupted ones).
+per height combination in one Warp kernel (``kernels/far_field.py``) over the far pairs; a
+combination is evaluated again only when its cells' lattice heights or the pair's offset on the
+lateral lattice FAR_LATERAL change, so the coupling is a function of the state alone (resumed runs
+repeat uninterrupted ones).
 
 Against the direct two-body solve (``tests/unit/test_far_field.py``; 2 um cells, k = 2): far
 apart the coupling is Blake's far field of the cells' first moments to 6 %; at 7 radii the pair
@@ -44,6 +47,8 @@ from ..hydro.mobility import ContactResolutionWarning
 from ..hydro.traction import solve_traction
 from ..surfaces.body import Body
 
+# a height this close to a lattice height, in lattice spacings, lies on it (FarField._height_sets)
+ROUND_OFF = 1e-9
 # m: a far pair's lateral offset is rounded to this lattice before its coupling is evaluated
 FAR_LATERAL = 0.5e-6
 # the stencil's points: the centre, six along the axes, twelve along the edges' diagonals, at this
@@ -136,32 +141,53 @@ class FarField:
                                                         else runtime.init().float32, model.flow.wall)
         self._sets: dict = {}  # (mesh index, height index) -> row of the arrays below
         self._tractions: list[CellTractions] = []
-        # of the last evaluation: (pairs (2, P), their keys (P, 4), their rows (P, row))
+        # of the last evaluation: (pairs (2, P), their keys (P, 4 height combinations, 4), rows (P, 4, row))
         self._last = None
 
     def rows(self, bodies, first, second, offsets) -> np.ndarray:
         """(P, row) the far pairs (first[p], second[p]) at lateral ``offsets`` (m, of the second
         cell from the first): the coupling of each cell's loads onto the other's motion and of
-        each one's traction in the flow onto the other's motion; their own blocks zero."""
+        each one's traction in the flow onto the other's motion; their own blocks zero. Each
+        cell's tractions are interpolated linearly between the two lattice heights around its
+        own (the coupling is linear in either cell's), so a pair is the bilinear blend of its
+        four height combinations, each kept until its key changes."""
         from .pairwise import PART_SIZES
 
         n_pairs = len(first)
         radii = self.model.outer_radii
-        heights = np.round(np.array([b.position[2] for b in bodies]) / self.height_lattice).astype(int)
-        sets = np.array([self._set(self.lone_of[i], h, bodies[i].mesh, radii[i]) for i, h in enumerate(heights)])
+        sets, shares = self._height_sets(bodies)  # (n, 2) below / above, (n, 2) their weights
         lattice = np.round(np.asarray(offsets, dtype=float).reshape(-1, 2) / FAR_LATERAL).astype(int)
-        keys = np.column_stack([sets[first], sets[second], lattice])
+        # (P, 4 combinations, key): the first cell's set below or above, the second's likewise
+        combination = np.array([(0, 0), (0, 1), (1, 0), (1, 1)])
+        keys = np.concatenate([sets[first][:, combination[:, 0], None], sets[second][:, combination[:, 1], None],
+                               np.repeat(lattice[:, None, :], 4, axis=1)], axis=2)
+        weights = shares[first][:, combination[:, 0]] * shares[second][:, combination[:, 1]]
         pairs = np.stack([first, second])
         last = self._last
         if last is None or not np.array_equal(last[0], pairs):
-            last = self._last = (pairs, np.full_like(keys, -1), np.zeros((n_pairs, sum(PART_SIZES))))
+            last = self._last = (pairs, np.full_like(keys, -1), np.zeros((n_pairs, 4, sum(PART_SIZES))))
         _, kept_keys, rows = last
-        stale = np.any(keys != kept_keys, axis=1)
+        stale = np.any(keys != kept_keys, axis=2) & (weights > 0.0)
         if np.any(stale):
+            pair_of, _ = np.nonzero(stale)
             unique, which = np.unique(keys[stale], axis=0, return_inverse=True)
-            rows[stale] = self._evaluated(unique, radii[first[stale]], radii[second[stale]], which.ravel())
+            rows[stale] = self._evaluated(unique, radii[first[pair_of]], radii[second[pair_of]], which.ravel())
             kept_keys[stale] = keys[stale]
-        return rows
+        return np.einsum("pc,pcr->pr", weights, rows)  # combinations never evaluated hold zeros and weigh 0
+
+    def _height_sets(self, bodies):
+        """((n, 2) the traction sets at the lattice heights below and above each cell, (n, 2) their
+        linear interpolation weights); a cell on a lattice height (to ROUND_OFF) takes it alone."""
+        radii = self.model.outer_radii
+        level = np.array([b.position[2] for b in bodies]) / self.height_lattice
+        nearest = np.round(level)
+        level = np.where(np.abs(level - nearest) < ROUND_OFF, nearest, level)
+        below = np.floor(level)
+        above_share = level - below
+        sets = np.array([[self._set(self.lone_of[i], int(h) + step, bodies[i].mesh, radii[i]) if share > 0 or step == 0
+                          else -1 for step, share in ((0, 1.0), (1, above_share[i]))]
+                         for i, h in enumerate(below)])
+        return sets, np.column_stack([1.0 - above_share, above_share])
 
     def _set(self, mesh_index: int, height_index: int, mesh, radius: float) -> int:
         key = (mesh_index, height_index)
