@@ -1,13 +1,24 @@
 """Shared helpers of the benchmark scripts: output folder, CSV tables, charts, timing."""
 
 import argparse
+import atexit
 import csv
+import os
+import shutil
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
 OUT = Path(__file__).resolve().parent.parent / "results" / "bench"
+
+# Benchmarks time the solves: each run starts from an empty snapshot store of its own (removed at
+# exit), not from the snapshots earlier runs kept (dynamics/snapshot_store.py), unless
+# WARPBEM_SNAPSHOT_STORE names one
+if "WARPBEM_SNAPSHOT_STORE" not in os.environ:
+    os.environ["WARPBEM_SNAPSHOT_STORE"] = tempfile.mkdtemp(prefix="warpbem-benchmark-snapshots-")
+    atexit.register(shutil.rmtree, os.environ["WARPBEM_SNAPSHOT_STORE"], ignore_errors=True)
 
 
 def arguments(doc: str) -> argparse.ArgumentParser:

@@ -29,7 +29,9 @@ coarse snapshot alone errs by 7e-3 (benchmarks/adhesion.py, 2c). The background 
 explicit loads and the stiff forces follow from a snapshot by linearity, so a step costs no
 solve while the cells stay near a snapped configuration already seen; the error is first
 order in the lattice spacings (charted by ``benchmarks/adhesion.py``). The evaluation stays a
-pure function of the state (resumed runs reproduce uninterrupted ones). Near contact the
+pure function of the state (resumed runs reproduce uninterrupted ones) to round-off: a snapshot's
+flow solve starts GMRES from the previous solve's solution, so the same snapshot solved after
+another history differs by about 1e-11 of the flow's motion (``snapshot_store.py``). Near contact the
 lateral lattice is halved for a snapshot until no gap between two bodies moves by more than half
 of it (GAP_SHARE); a snapped configuration that still moves one more, or is not a valid
 placement, is solved exactly.

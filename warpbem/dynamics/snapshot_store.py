@@ -13,9 +13,12 @@ otherwise, or ``WARPBEM_CACHE``); Warp's kernels stay where they are. Deleting t
 The key of an entry is a sha256 over everything a snapshot's numbers depend on, over-inclusive
 (a false miss costs a solve, a false hit is a wrong answer):
 
-* FORMAT (the layout of an entry), warpbem's version and a digest of the package's own source
-  (warpbem/ and its kernels): the version stays the same from one commit to the next while the
-  numerics change. So in a checkout any edit of the package starts the store afresh;
+* FORMAT (the layout of an entry), warpbem's version and a digest of the source a snapshot's
+  numbers come from (SOLVING_SOURCES: the kernels, the solver's layers ``hydro/`` and
+  ``surfaces/``, ``dynamics/hydrodynamics.py`` that builds a snapshot from its solves, and the
+  options and runtime they read): the version stays the same from one commit to the next while the
+  numerics change, so in a checkout an edit of any of them starts the store afresh; an edit
+  elsewhere (the far field, the pairs' assembly, the app) keeps it;
 * the snapshot's key in the run (its kind, the mesh's index in the model, the lattice heights,
   spacing and offset): which snapshot of the model it is;
 * the bodies it is solved at: each mesh's node coordinates and connectivity (the index names a
@@ -74,6 +77,9 @@ HEADER = struct.Struct(">I32s32sQ")  # FORMAT, the key's sha256, the payload's s
 # the options that say where and how large the store is: they change no number, so not in the key
 STORE_FIELDS = ("snapshot_store", "snapshot_store_size")
 ENVIRONMENT = "WARPBEM_SNAPSHOT_STORE"
+# the sources a snapshot's numbers come from (module docstring): folders and files of the package,
+# "kernels" the kernels' package
+SOLVING_SOURCES = ("kernels", "hydro", "surfaces", "dynamics/hydrodynamics.py", "options.py", "runtime.py", "units.py")
 NOT_BYTES = b"not bytes"  # what an entry that is not bytes reads as (_BytesOnly): no MAGIC, so foreign
 
 
@@ -236,13 +242,23 @@ def _software() -> dict:
     import warpbem.kernels
 
     source = hashlib.sha256()
-    for root in (Path(warpbem.__file__).parent, Path(warpbem.kernels.__file__).parent):
-        for path in sorted(p for p in root.rglob("*") if p.suffix in (".py", ".json") and "__pycache__" not in p.parts):
-            source.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes())
+    package, kernels = Path(warpbem.__file__).parent, Path(warpbem.kernels.__file__).parent
+    for root, path in _solving_sources(package, kernels):
+        source.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes())
     blas = sorted((i["internal_api"], i["version"], str(i.get("architecture"))) for i in threadpoolctl.threadpool_info()
                   if i["user_api"] == "blas")
     return dict(warpbem=warpbem.__version__, source=source.hexdigest(), warp=warp.config.version,
                 numpy=np.__version__, scipy=scipy.__version__, blas=blas, machine=platform.machine())
+
+
+def _solving_sources(package: Path, kernels: Path):
+    """(root, path) of the source files a snapshot's numbers come from (SOLVING_SOURCES), sorted."""
+    for name in SOLVING_SOURCES:
+        root = kernels if name == "kernels" else package
+        where = kernels if name == "kernels" else package / name
+        files = where.rglob("*") if where.is_dir() else [where]
+        for path in sorted(p for p in files if p.suffix in (".py", ".json") and "__pycache__" not in p.parts):
+            yield root, path
 
 
 def _device_identity(device) -> str:
