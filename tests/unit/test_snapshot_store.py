@@ -305,3 +305,19 @@ def test_a_scene_run_twice_reads_every_snapshot_and_repeats_its_frames_bit_for_b
         assert f["bond_count"][-1].sum() > 0  # the runs reach the bonds they compare
         for name in names:
             assert np.array_equal(f[name][:], g[name][:]), name
+
+
+def test_the_source_digest_follows_the_code_not_its_prose(tmp_path):
+    """The key holds a digest of the solving sources' code (snapshot_store._code): a changed
+    docstring or comment keeps every entry, a changed number in the code starts afresh."""
+    from warpbem.dynamics.snapshot_store import _code
+
+    texts = {"plain": 'def f(x):\n    return 2.0 * x\n',
+             "prose": '"""A module."""\n\n\ndef f(x):\n    """Twice x."""\n    return 2.0 * x  # doubled\n',
+             "code": 'def f(x):\n    return 3.0 * x\n'}
+    codes = {}
+    for name, text in texts.items():
+        (tmp_path / f"{name}.py").write_text(text)
+        codes[name] = _code(tmp_path / f"{name}.py")
+    assert codes["plain"] == codes["prose"]
+    assert codes["plain"] != codes["code"]

@@ -17,8 +17,9 @@ The key of an entry is a sha256 over everything a snapshot's numbers depend on, 
   numbers come from (SOLVING_SOURCES: the kernels, the solver's layers ``hydro/`` and
   ``surfaces/``, ``dynamics/hydrodynamics.py`` that builds a snapshot from its solves, and the
   options and runtime they read): the version stays the same from one commit to the next while the
-  numerics change, so in a checkout an edit of any of them starts the store afresh; an edit
-  elsewhere (the far field, the pairs' assembly, the app) keeps it;
+  numerics change, so in a checkout an edit of their code starts the store afresh; an edit of
+  their comments and docstrings (the digest is over the syntax tree without them), or of any
+  other module (the far field, the pairs' assembly, the app), keeps it;
 * the snapshot's key in the run (its kind, the mesh's index in the model, the lattice heights,
   spacing and offset): which snapshot of the model it is;
 * the bodies it is solved at: each mesh's node coordinates and connectivity (the index names a
@@ -52,6 +53,7 @@ store. A value that another program pickled under a key is never unpickled (``_B
 
 from __future__ import annotations
 
+import ast
 import dataclasses
 import functools
 import hashlib
@@ -244,7 +246,7 @@ def _software() -> dict:
     source = hashlib.sha256()
     package, kernels = Path(warpbem.__file__).parent, Path(warpbem.kernels.__file__).parent
     for root, path in _solving_sources(package, kernels):
-        source.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes())
+        source.update(str(path.relative_to(root)).encode() + b"\0" + _code(path))
     blas = sorted((i["internal_api"], i["version"], str(i.get("architecture"))) for i in threadpoolctl.threadpool_info()
                   if i["user_api"] == "blas")
     return dict(warpbem=warpbem.__version__, source=source.hexdigest(), warp=warp.config.version,
@@ -259,6 +261,20 @@ def _solving_sources(package: Path, kernels: Path):
         files = where.rglob("*") if where.is_dir() else [where]
         for path in sorted(p for p in files if p.suffix in (".py", ".json") and "__pycache__" not in p.parts):
             yield root, path
+
+
+def _code(path: Path) -> bytes:
+    """The code of a source file without its comments and docstrings (the syntax tree of a .py
+    file with every docstring removed; a .json file's bytes): an edit of the prose keeps the store."""
+    if path.suffix != ".py":
+        return path.read_bytes()
+    tree = ast.parse(path.read_text())
+    for node in ast.walk(tree):
+        body = getattr(node, "body", None)
+        if (isinstance(body, list) and body and isinstance(body[0], ast.Expr)
+                and isinstance(body[0].value, ast.Constant) and isinstance(body[0].value.value, str)):
+            node.body = body[1:] or [ast.Pass()]
+    return ast.dump(tree).encode()
 
 
 def _device_identity(device) -> str:
