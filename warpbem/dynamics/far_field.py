@@ -68,7 +68,7 @@ for _i, _j, _k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
     LEVI_CIVITA[_i, _j, _k], LEVI_CIVITA[_i, _k, _j] = 1.0, -1.0
 
 
-def monomials(relative, order: int = 2) -> np.ndarray:
+def monomials(relative) -> np.ndarray:
     """(N, 10) the monomials 1, x, y, z, xx, xy, xz, yy, yz, zz of points ``relative`` to the
     centre (in outer radii): the moments of a force distribution are its forces' sums against them."""
     x = np.asarray(relative, dtype=float)
@@ -125,14 +125,14 @@ class CellTractions:
 class FarField:
     """The far pairs' part of the grand mobility and of the flow's motion (module docstring) for
     the model of ``hydro`` (a ``HydrodynamicSolves``), as rows of ``pairwise.part_row``'s layout
-    whose cells' own blocks are zero: what the pair adds to the cells alone."""
+    (``row_size`` long) whose cells' own blocks are zero: what the pair adds to the cells alone."""
 
-    def __init__(self, hydro):
+    def __init__(self, hydro, row_size: int):
         from .. import runtime
         from ..kernels import far_field as kernels
 
         model = hydro.model
-        self.model, self.lone_of = model, hydro.lone_of
+        self.model, self.lone_of, self.row_size = model, hydro.lone_of, row_size
         self.height_lattice = hydro.interaction  # the pair snapshots' heights
         self.device = runtime.resolve_device(hydro.mobility.device)
         self.options = model.solver.without_accuracy()
@@ -151,8 +151,6 @@ class FarField:
         cell's tractions are interpolated linearly between the two lattice heights around its
         own (the coupling is linear in either cell's), so a pair is the bilinear blend of its
         four height combinations, each kept until its key changes."""
-        from .pairwise import PART_SIZES
-
         n_pairs = len(first)
         radii = self.model.outer_radii
         sets, shares = self._height_sets(bodies)  # (n, 2) below / above, (n, 2) their weights
@@ -165,7 +163,7 @@ class FarField:
         pairs = np.stack([first, second])
         last = self._last
         if last is None or not np.array_equal(last[0], pairs):
-            last = self._last = (pairs, np.full_like(keys, -1), np.zeros((n_pairs, 4, sum(PART_SIZES))))
+            last = self._last = (pairs, np.full_like(keys, -1), np.zeros((n_pairs, 4, self.row_size)))
         _, kept_keys, rows = last
         stale = np.any(keys != kept_keys, axis=2) & (weights > 0.0)
         if np.any(stale):

@@ -171,7 +171,7 @@ class PairwiseMobility:
         # which of its points' rows were looked up (P, 4), those rows (P, 4, row))
         self._squares = None
         self.remainder = ManyBodyRemainder(hydro) if model.solver.many_body == "coarse" else None
-        self.far = FarField(hydro) if model.solver.far_field == "moments" else None
+        self.far = FarField(hydro, sum(PART_SIZES)) if model.solver.far_field == "moments" else None
         self.near_radius = model.solver.near_radius
 
     def assemble(self, bodies):
