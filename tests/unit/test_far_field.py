@@ -78,3 +78,15 @@ def test_at_the_near_radius_the_far_field_holds_the_pair_to_its_direct_solve():
         alone = relative_change(motion(*solves(grand_mobility="pairs", pair_cutoff=0.0)._snapshot(bodies)), direct)
         assert far[0] < bound[0] and far[1] < bound[1]
         assert min(alone) > 20 * max(far)
+
+
+@pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
+def test_the_cells_tractions_are_kept_on_disk_and_read_back_bit_for_bit():
+    """The far field's traction sets go to the snapshot store (snapshot_store.py) with the lone and
+    pair snapshots: a second model of the same cells solves none and couples them identically."""
+    rho = 40e-6 * np.array([np.cos(np.pi / 6), np.sin(np.pi / 6)])
+    bodies = [Body(MESH, position=(0.0, 0.0, HEIGHT)), Body(MESH, position=(*rho, HEIGHT + 13e-9))]
+    first, second = (solves(grand_mobility="pairs", near_radius=1e-9) for _ in range(2))
+    snapshots = [motion(*hydro._snapshot(bodies)) for hydro in (first, second)]
+    assert first.pairwise.far.solved == 2 and second.pairwise.far.solved == 0
+    assert all(np.array_equal(a, b) for a, b in zip(*snapshots))

@@ -19,7 +19,7 @@ which the near radius leaves to the pair snapshots.
 Each cell's tractions come from seven solves of the cell alone above the wall
 (``hydro/traction.py``): a unit force and torque along each axis, and the ambient flow with no
 load, at the heights of the pair snapshots' height lattice (``reuse_interaction``; cells sharing a
-mesh share them), interpolated linearly to the cell's own height between the two around it (the
+mesh share them; kept in the snapshot store across runs, ``snapshot_store.py``), interpolated linearly to the cell's own height between the two around it (the
 coupling is linear in each cell's tractions, so a pair is the bilinear blend of its four height
 combinations). Far from the cell its traction is felt through its moments about the centre;
 they are kept to second order (force, torque and stresslet, and the second moments that carry
@@ -40,12 +40,14 @@ larger.
 from __future__ import annotations
 
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..hydro.mobility import ContactResolutionWarning
 from ..hydro.traction import solve_traction
 from ..surfaces.body import Body
+from .snapshot_store import SnapshotStore, snapshot_digest
 
 # a height this close to a lattice height, in lattice spacings, lies on it (FarField._height_sets)
 ROUND_OFF = 1e-9
@@ -89,12 +91,19 @@ def exact_loads(moments: np.ndarray, force: np.ndarray, torque: np.ndarray) -> n
     return moments
 
 
+@dataclass(frozen=True)
 class CellTractions:
     """The compressed tractions (module docstring) of one cell at one height: ``points`` (P, 3)
     m, relative to the cell's lateral position, and ``weights`` (P, 3, 7) N per unit load (the
     force the fluid exerts on the stencil point; the flow's column at the model's shear rate)."""
 
-    def __init__(self, mesh, height: float, radius: float, flow, options, device):
+    points: np.ndarray
+    weights: np.ndarray
+
+    @classmethod
+    def solved(cls, mesh, height: float, radius: float, flow, options, device) -> "CellTractions":
+        """The seven traction solves of the cell of ``mesh`` (outer ``radius``) alone at ``height``
+        above the wall, compressed to the stencil."""
         cell = Body(mesh, position=(0.0, 0.0, height))
         solves = []
         with warnings.catch_warnings():  # refined as the mobility solves are; charted elsewhere
@@ -110,16 +119,15 @@ class CellTractions:
         # least-norm stencil forces with the given moments (the stencil in outer radii)
         to_weights = np.linalg.pinv(monomials(STENCIL_RADIUS * STENCIL).T)
         weights = np.zeros((STENCIL_POINTS, 3, SOURCES))
-        for c, solved in enumerate(solves):
-            forces = solved.traction * solved.areas[:, None]
-            moments = monomials((solved.points - centre) / radius).T @ forces  # (10, 3)
+        for c, solution in enumerate(solves):
+            forces = solution.traction * solution.areas[:, None]
+            moments = monomials((solution.points - centre) / radius).T @ forces  # (10, 3)
             load = np.zeros(6)
             if c < 6:
                 load[c] = -1.0  # the fluid's force or torque on the cell is minus the load
             moments = exact_loads(moments, load[:3], load[3:] / radius)
             weights[:, :, c] = to_weights @ moments
-        self.points = STENCIL * (STENCIL_RADIUS * radius) + centre
-        self.weights = weights
+        return cls(STENCIL * (STENCIL_RADIUS * radius) + centre, weights)
 
 
 class FarField:
@@ -139,6 +147,9 @@ class FarField:
         self._launch = kernels.pair_couplings
         self._kernels = kernels.build_far_field_kernels(runtime.init().float64 if model.solver.dtype == "float64"
                                                         else runtime.init().float32, model.flow.wall)
+        self.store = (SnapshotStore((CellTractions,), size_limit=model.solver.snapshot_store_size)
+                      if model.solver.snapshot_store == "on" else None)
+        self.solved = 0  # traction sets solved (not read from the store)
         self._sets: dict = {}  # (mesh index, height index) -> row of the arrays below
         self._tractions: list[CellTractions] = []
         # of the last evaluation: (pairs (2, P), their keys (P, 4 height combinations, 4), rows (P, 4, row))
@@ -188,11 +199,23 @@ class FarField:
         return sets, np.column_stack([1.0 - above_share, above_share])
 
     def _set(self, mesh_index: int, height_index: int, mesh, radius: float) -> int:
+        """The row of the tractions of ``mesh`` at lattice height ``height_index``: kept, else from
+        the disk store (``snapshot_store.py``, as the lone and pair snapshots), else solved."""
         key = (mesh_index, height_index)
         if key not in self._sets:
+            height = height_index * self.height_lattice
+            digest = None
+            if self.store is not None:
+                digest = snapshot_digest(("tractions",) + key, [Body(mesh, position=(0.0, 0.0, height))], [radius],
+                                         self.model.solver, self.model.flow, 0.0, "traction", self.device)
+            found = self.store.get(digest) if digest else None
+            if found is None:
+                found = (CellTractions.solved(mesh, height, radius, self.model.flow, self.options, self.device),)
+                self.solved += 1
+                if digest:
+                    self.store.put(digest, found)
             self._sets[key] = len(self._tractions)
-            self._tractions.append(CellTractions(mesh, height_index * self.height_lattice, radius, self.model.flow,
-                                                 self.options, self.device))
+            self._tractions.append(found[0])
         return self._sets[key]
 
     def _evaluated(self, keys, radius_first, radius_second, which) -> np.ndarray:

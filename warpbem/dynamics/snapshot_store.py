@@ -15,11 +15,12 @@ The key of an entry is a sha256 over everything a snapshot's numbers depend on, 
 
 * FORMAT (the layout of an entry), warpbem's version and a digest of the source a snapshot's
   numbers come from (SOLVING_SOURCES: the kernels, the solver's layers ``hydro/`` and
-  ``surfaces/``, ``dynamics/hydrodynamics.py`` that builds a snapshot from its solves, and the
+  ``surfaces/``, ``dynamics/hydrodynamics.py`` that builds a snapshot from its solves,
+  ``dynamics/far_field.py`` that compresses the far field's tractions, also kept here, and the
   options and runtime they read): the version stays the same from one commit to the next while the
   numerics change, so in a checkout an edit of their code starts the store afresh; an edit of
   their comments and docstrings (the digest is over the syntax tree without them), or of any
-  other module (the far field, the pairs' assembly, the app), keeps it;
+  other module (the pairs' assembly, the app), keeps it;
 * the snapshot's key in the run (its kind, the mesh's index in the model, the lattice heights,
   spacing and offset): which snapshot of the model it is;
 * the bodies it is solved at: each mesh's node coordinates and connectivity (the index names a
@@ -81,7 +82,8 @@ STORE_FIELDS = ("snapshot_store", "snapshot_store_size")
 ENVIRONMENT = "WARPBEM_SNAPSHOT_STORE"
 # the sources a snapshot's numbers come from (module docstring): folders and files of the package,
 # "kernels" the kernels' package
-SOLVING_SOURCES = ("kernels", "hydro", "surfaces", "dynamics/hydrodynamics.py", "options.py", "runtime.py", "units.py")
+SOLVING_SOURCES = ("kernels", "hydro", "surfaces", "dynamics/hydrodynamics.py", "dynamics/far_field.py", "options.py",
+                   "runtime.py", "units.py")
 NOT_BYTES = b"not bytes"  # what an entry that is not bytes reads as (_BytesOnly): no MAGIC, so foreign
 
 
