@@ -52,14 +52,22 @@ def candidate_pairs(positions, outer_radii, fixed, wall: bool, within: float) ->
     below ``within``. Each pair of free bodies appears once; fixed bodies are never ``i``."""
     positions, outer_radii = np.asarray(positions, dtype=float), np.asarray(outer_radii, dtype=float)
     fixed = np.asarray(fixed, dtype=bool)
-    pairs = []
-    for i in np.flatnonzero(~fixed):
-        if wall and positions[i][2] - outer_radii[i] < within:
-            pairs.append((int(i), WALL))
-        # every other body at once: a loop over them took most of a step among 1000 fixed cells
-        gaps = np.linalg.norm(positions - positions[i], axis=1) - outer_radii[i] - outer_radii
-        pairs += [(int(i), int(j)) for j in np.flatnonzero(gaps < within) if j != i and (fixed[j] or j > i)]
-    return pairs
+    free = np.flatnonzero(~fixed)
+    # every free body against every body at once (a loop over the free ones, and a loop over the others
+    # before it, took most of a step among 1000 fixed cells and 6 ms of a step of 64 free cells)
+    gaps = (np.linalg.norm(positions[None, :] - positions[free, None], axis=2) - outer_radii[free, None]
+            - outer_radii[None, :])
+    others = np.arange(len(positions))
+    near = (gaps < within) & (others[None, :] != free[:, None]) & (fixed[None, :] | (others[None, :] > free[:, None]))
+    rows, columns = np.nonzero(near)
+    first, second = free[rows], others[columns]
+    if wall:
+        to_wall = free[positions[free, 2] - outer_radii[free] < within]
+        first = np.concatenate([to_wall, first])
+        second = np.concatenate([np.full(len(to_wall), WALL), second])
+    # each free body's wall pair first, then the other bodies in order
+    order = np.lexsort((second, first))
+    return list(zip(first[order].tolist(), second[order].tolist()))
 
 
 class GapFinder:
@@ -193,9 +201,13 @@ class Contacts:
         pairs = [p for p in self.pairs(np.inf) if among == "all" or (p[1] == WALL) == (among == "wall")]
         if among == "wall":  # every free body's, in one launch (GapFinder.to_wall)
             return float(min((g.distance for g in self.to_wall([i for i, _ in pairs])), default=np.inf))
-        bounds = [self.positions[i][2] - self.outer_radii[i] if j == WALL else
-                  np.linalg.norm(self.positions[i] - self.positions[j]) - self.outer_radii[i] - self.outer_radii[j]
-                  for i, j in pairs]
+        # the bounding-sphere gaps at once (a list over the 2016 pairs of 64 cells took 7 ms a frame);
+        # the exact gaps' minimum does not depend on the order they are searched in
+        first, second = np.array(pairs, dtype=int).reshape(-1, 2).T
+        positions, radii = np.asarray(self.positions, dtype=float), np.asarray(self.outer_radii, dtype=float)
+        other = np.where(second == WALL, first, second)
+        bounds = np.where(second == WALL, positions[first, 2] - radii[first],
+                          np.linalg.norm(positions[first] - positions[other], axis=1) - radii[first] - radii[other])
         best = np.inf
         for k in np.argsort(bounds, kind="stable"):
             if bounds[k] >= best:
