@@ -20,6 +20,7 @@ from warpbem.dynamics.model import Flow, Model, SolverOptions, build_solver
 from warpbem.dynamics.snapshot_store import (ENVIRONMENT, FORMAT, HEADER, MAGIC, SnapshotStore, SnapshotStoreError,
                                              SnapshotStoreWarning, snapshot_digest)
 from warpbem.surfaces.body import Body
+from tests.unit.test_pairwise import PAIRS_SCENE  # the two cells of the pairs' own resume test
 
 A = 2e-6
 MESH = wb.mesh.sphere(A, 2)
@@ -27,33 +28,6 @@ HEIGHT = A + 236e-9
 SPACING = 2e-9
 SNAPSHOT_KEY = ("lone", 0, SPACING, (0.0, 0.0, 1118.0))
 
-PAIRS_SCENE = """
-[flow]
-shear_rate = 100.0
-viscosity = 1.0e-3
-[physics]
-gravity = true
-repulsion = true
-adhesion = true
-[adhesion]
-spring_constant = 5.0e-4
-seed = 3
-[time]
-end = 0.003
-dt_max = 2.7e-4
-dt_min = 1.0e-7
-contact_gap = 1.0e-9
-scheme = "euler"
-frame_interval = 1.0e-3
-[solver]
-grand_mobility = "pairs"
-[[arrays]]
-count = [2, 1]
-pitch = [10.0e-6, 0.0]
-origin = [0.0, 0.0, 2.236e-6]
-density = 1050.0
-mesh = { shape = "sphere", radius = 2.0e-6, subdivisions = 2 }
-"""
 
 
 def solves(**solver):
