@@ -308,3 +308,15 @@ def test_sixteen_cells_step_alike_with_the_newton_step_solved_by_gmres(tmp_path,
         assert g["bond_count"][-1].sum() > 0
         np.testing.assert_array_equal(f["bond_receptor"][:], g["bond_receptor"][:])
         np.testing.assert_allclose(f["position"][:], g["position"][:], rtol=0, atol=1e-9 * A)
+
+
+def test_on_pairs_the_operator_is_chosen_for_a_pair_not_the_whole_patch():
+    """With grand_mobility = "pairs" no solve holds more than two cells (the whole system is never
+    solved), so the operator's form is chosen for a pair: 400 cells of the k = 3 sphere (64 800
+    unknowns, a 34 GB dense matrix) still solve their pair snapshots dense, as two cells do."""
+    mesh = wb.mesh.sphere(5e-6, 3)
+    pairs, system = (Model([mesh] * 400, [False] * 400, Flow(100.0, 1e-3), solver=SolverOptions(grand_mobility=mode))
+                     for mode in ("pairs", "system"))
+    assert pairs.unknowns == 2 * 3 * len(mesh.elements) and system.unknowns == 400 * 3 * len(mesh.elements)
+    assert build_solver(pairs.solver, pairs.flow, "cpu", unknowns=pairs.unknowns).mode == "dense"
+    assert build_solver(system.solver, system.flow, "cpu", unknowns=system.unknowns).mode != "dense"

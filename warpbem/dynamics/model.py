@@ -161,10 +161,16 @@ class Model:
 
     @property
     def unknowns(self) -> int:
-        """The mobility problem's unknowns before contact refinement: 3 per density point (with an
-        accuracy target, which chooses the density per solve, at the time-stepping default's)."""
+        """The unknowns of the largest mobility problem the time stepping solves, before contact
+        refinement: 3 per density point (with an accuracy target, which chooses the density per
+        solve, at the time-stepping default's) of every body, or with grand_mobility = "pairs" of
+        the two largest cells (the pairs never solve the whole system: a patch of 256 cells would
+        otherwise solve its pair snapshots on the treecode its whole system would need)."""
         order = self.solver.density_order or TIME_STEPPING_DENSITY_ORDER
-        return 3 * order**2 * sum(len(m.elements) for m in self.meshes)
+        elements = sorted(len(m.elements) for m in self.meshes)
+        if self.solver.grand_mobility == "pairs":
+            elements = elements[-2:]
+        return 3 * order**2 * sum(elements)
 
     @cached_property
     def fixed_mask(self) -> np.ndarray:
