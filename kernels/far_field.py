@@ -55,14 +55,14 @@ def build_far_field_kernels(dtype, wall: bool) -> SimpleNamespace:
         unused = vec3()
         for p in range(n_points):
             x = points[b, p] + shift
+            w = source_weights[b, p]
+            flow_b = vec3(w[0, SOURCES - 1], w[1, SOURCES - 1], w[2, SOURCES - 1])  # b's flow column at x_p
             at_x = sources()
             for q in range(n_points):
                 g = greens.stokeslet(x, unused, points[a, q])
                 at_x += g * source_weights[a, q]
                 # b's flow column onto a's motions: the velocity at y_q is G(y_q, x_p) w = G^T w
-                w = source_weights[b, p]
-                toward_a = wp.transpose(g) * vec3(w[0, SOURCES - 1], w[1, SOURCES - 1], w[2, SOURCES - 1])
-                reverse += wp.transpose(motion_weights[a, q]) * toward_a
+                reverse += wp.transpose(motion_weights[a, q]) * (wp.transpose(g) * flow_b)
             total += wp.transpose(motion_weights[b, p]) * at_x
         out[k] = total * inverse_viscosity
         out_reverse[k] = vec3(reverse[0], reverse[1], reverse[2]) * inverse_viscosity

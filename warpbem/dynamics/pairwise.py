@@ -237,9 +237,10 @@ class PairwiseMobility:
         return velocity, angular, basis_velocity, basis_angular
 
     def _lone_snapshots(self, bodies, spacing: float, cells=None):
-        """{cell: its lone snapshot} of ``cells`` (default all) at their heights snapped to ``spacing`` (``HydrodynamicSolves._lone``), looked up once per
-        mesh and lattice height: the cells of a patch share a few. A height too near the wall for
-        the lattice is solved as it is, cell by cell."""
+        """{cell: its lone snapshot} of ``cells`` (default all) at their heights snapped to
+        ``spacing`` (``HydrodynamicSolves._lone``), looked up once per mesh and lattice height: the
+        cells of a patch share a few. A height too near the wall for the lattice is solved as it
+        is, cell by cell."""
         hydro = self.hydro
         cells = range(len(bodies)) if cells is None else cells
         heights = np.round(np.array([bodies[b].position[2] for b in cells]) / spacing).tolist()
