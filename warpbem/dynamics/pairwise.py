@@ -55,6 +55,7 @@ import numpy as np
 
 from ..hydro.options import NEAR_RADII
 from ..surfaces.body import Body
+from .close_pairs import ClosePairs
 from .far_field import FarField
 from .many_body import ManyBodyRemainder
 
@@ -173,6 +174,7 @@ class PairwiseMobility:
         self.remainder = ManyBodyRemainder(hydro) if model.solver.many_body == "coarse" else None
         self.far = FarField(hydro, sum(PART_SIZES)) if model.solver.far_field == "moments" else None
         self.near_radius = model.solver.near_radius
+        self.close = ClosePairs(hydro) if model.solver.close_pairs == "lubrication" else None
 
     def assemble(self, bodies):
         """(flow velocity, angular velocity (n, 3); basis velocity, angular velocity (6n, n, 3),
@@ -206,9 +208,13 @@ class PairwiseMobility:
         within = distance <= self.cutoff
         first, second, offsets, distance = first[within], second[within], offsets[within], distance[within]
         near = self._near(first, second, distance)
+        close = near & self.close.takes(first, second, positions) if self.close is not None else np.zeros_like(near)
         rows = np.zeros((len(first), sum(PART_SIZES)))
-        if np.any(near):
-            rows[near] = self._pair_rows(bodies, first[near], second[near], offsets[near])
+        lattice = near & ~close
+        if np.any(lattice):
+            rows[lattice] = self._pair_rows(bodies, first[lattice], second[lattice], offsets[lattice])
+        if np.any(close):  # near contact: the two-sphere resistance plus the wall's part (close_pairs.py)
+            rows[close] = self._close_rows(bodies, first[close], second[close])
         if not np.all(near):  # the far pairs add their coupling to the cells alone (far_field.py)
             rows[~near] = self.far.rows(bodies, first[~near], second[~near], offsets[~near])
         flow_v, flow_w, grand_v, grand_w = (part.reshape((-1,) + shape) for part, shape in
@@ -292,11 +298,28 @@ class PairwiseMobility:
         rows = np.einsum("pc,pcr->pr", weights, point_rows)  # the points never looked up hold zeros and weigh 0
         for p in too_close:
             squares[p] = np.nan  # looked up again at the next assembly
-            i, j = first[p], second[p]
-            flow, grand = hydro._solved([bodies[i], bodies[j]], self.radii[[i, j]])
-            rows[p] = part_row(flow.velocity, flow.angular_velocity, grand.velocity, grand.angular_velocity,
-                               False, False)
+            rows[p] = self._solved_row(bodies, first[p], second[p])
         return rows
+
+    def _close_rows(self, bodies, first, second) -> np.ndarray:
+        """(P, row) the snapshots of the close pairs (first[p], second[p]) as rows (part_row):
+        from the two-sphere resistance and the wall's part on its lattice at the pair lattice's
+        heights (close_pairs.py); a pair one of whose lattice points is not a valid placement is
+        solved as it is."""
+        d = self.hydro.interaction
+        heights = np.round(np.array([b.position[2] for b in bodies]) / d) * d
+        rows = np.zeros((len(first), sum(PART_SIZES)))
+        for p, (i, j) in enumerate(zip(first.tolist(), second.tolist())):
+            try:
+                rows[p] = part_row(*self.close.parts(bodies, i, j, heights))
+            except TooClose:
+                rows[p] = self._solved_row(bodies, i, j)
+        return rows
+
+    def _solved_row(self, bodies, i: int, j: int) -> np.ndarray:
+        """The part_row of the pair (i, j) solved as it is (not kept)."""
+        flow, grand = self.hydro._solved([bodies[i], bodies[j]], self.radii[[i, j]])
+        return part_row(flow.velocity, flow.angular_velocity, grand.velocity, grand.angular_velocity, False, False)
 
     def _look_up(self, bodies, first, second, points, weights, spacings, heights, stale) -> set:
         """Fill the kept rows (self._squares) of the ``stale`` pairs' lattice points of weight >

@@ -61,6 +61,7 @@ DEFAULT_PAIR_CUTOFF = 1e-3
 # whatever the mesh: the 71 of 10 ms of scenes/rolling_patch_4x4.toml took 0.6 MB)
 DEFAULT_SNAPSHOT_STORE_SIZE = 2e9
 FAR_FIELDS = ("moments", "none")
+CLOSE_PAIRS = ("lubrication", "lattice")
 # pairs of cells farther apart than this many mean outer radii are far (dynamics/far_field.py):
 # measured on two 5 um cells at the rolling height (benchmarks/many_cells.py --parts far): at 7 and
 # 8 radii (35, 40 um) the pair errs by 4.4e-4 and 1.6e-4 of the grand mobility, most of it the second
@@ -194,6 +195,12 @@ class SolverOptions:
                                  " snapshots at contact distance, growing as (distance / contact)^(5/2) in steps of 2"
                                  " up to distance / 8; each pair interpolated bilinearly between its lattice points",
                                  "m", low=0.0, high=1e-5, low_open=True)
+    close_pairs: str = option("lubrication", "with grand_mobility = 'pairs', two equal spherical cells less than half a"
+                              " radius apart: 'lubrication' takes their pair snapshot from the exact two-sphere"
+                              " resistance (Jeffrey & Onishi 1984) plus the wall's part on a coarse lattice of gaps"
+                              " (0.1 radius x 2^(k/2)) and angles (dynamics/close_pairs.py); 'lattice' from the pair"
+                              " lattice of pair_lateral, solving the pair as it is where a lattice point is too"
+                              " near", choices=CLOSE_PAIRS)
     pair_cutoff: float = option(DEFAULT_PAIR_CUTOFF, "with grand_mobility = 'pairs', pairs of cells farther apart"
                                 " along the wall than this do not interact", "m", low=0.0, high=1e-2)
     far_field: str = option("moments", "with grand_mobility = 'pairs', the pairs farther apart than near_radius:"
