@@ -36,6 +36,12 @@
    flow, the pair's snapshot interpolated bilinearly between the points of its lattice (as the
    pairs do) and taken from the nearest point instead, against the direct solve, for lattices of
    several spacings;
+1c'. close: two cells 0.05-2 um apart at the rolling height, along the flow and 30 degrees off it,
+   their pair from the close-pair model (close_pairs.py: the exact two-sphere resistance plus the
+   wall's part on a lattice of gaps) and from the pairs' lateral lattice, against their direct
+   two-body solve; along the flow at 0.1 um and more, against the direct solve on the k + 1
+   sphere with quadratic densities, beside the model built on that discretisation (the model's
+   own error) and the k sphere's direct solve (the discretisation's);
 1d. reuse: the pair lattice points a run's frames visit (``--runs RUN.h5 ...``, runs of free
    spherical cells on pairs): the interpolation's four around each pair's offset on the lattice
    that grows as distance^(5/2) from 250 nm (the pairs' rule), against the nearest point of the
@@ -59,7 +65,7 @@
    GMRES on (I + dt A Q) s = b, products O(p^2)) and from the matrix formed and factored by
    Cholesky (O(p^3), before it), interleaved cell count by cell count.
 
-    python benchmarks/many_cells.py [--parts accuracy resistance cutoff far lattice reuse factors batch cost implicit]
+    python benchmarks/many_cells.py [--parts accuracy resistance cutoff far close lattice reuse factors batch cost implicit]
         [--runs RUN.h5 ...] [--quick]
         [--cells N ...] [--system-cells N ...] [--remainder-cells N ...] [--cases KIND:N:UM ...]
         [--refinement R] [--solver-paths] [--device cuda:0]
@@ -589,11 +595,57 @@ def cost_chart(rows, path):
     return save_chart(fig, path, [ax], legend_size=8)
 
 
+def close_error(device, cases, k, reference_k, reference_gaps, lattice_from):
+    """Two cells near contact (close_pairs.py: the exact two-sphere resistance plus the wall's part
+    W on a lattice of gaps, turned by the line's angle) at the rolling height, ``cases`` ((angle
+    of their line from the flow, gap between their surfaces)): against their direct two-body solve
+    on the k sphere (time-stepped defaults), beside the pairs' lateral lattice from gaps of
+    ``lattice_from`` (``close_pairs = "lattice"``, its snapshots solved as the pair is where a
+    lattice point is too near: below, the direct solve itself); and, along
+    the flow at ``reference_gaps``, against the direct solve on the ``reference_k`` sphere with
+    quadratic densities (the reference), beside the model built on that discretisation (its own
+    error: W from its lattice snapshots, interpolated and extrapolated) and the k sphere's direct
+    solve (the discretisation's error). Wall times of the model (its lattice snapshots included)
+    and of the direct solves."""
+    mesh, fine = wb.mesh.sphere(A, k), wb.mesh.sphere(A, reference_k)
+    heights_exact = dict(grand_mobility="pairs", reuse_tolerance=1e-12, reuse_interaction=1e-12)
+    close, lattice = (solves(mesh, 2, device, **heights_exact, close_pairs=c) for c in ("lubrication", "lattice"))
+    direct = solves(mesh, 2, device)
+    fine_close = solves(fine, 2, device, **heights_exact, density_order=2)
+    fine_direct = solves(fine, 2, device, density_order=2)
+    rows, progress = [], Progress(len(cases))
+    for angle, gap in cases:
+        line = (2 * A + gap) * np.array([np.cos(angle), np.sin(angle)])
+        bodies = [Body(mesh, position=(0.0, 0.0, REST)), Body(mesh, position=(*line, REST))]
+        row = dict(angle_deg=np.degrees(angle), gap_um=gap * 1e6, k=k)
+        timed = {}
+        for name, hydro in (("direct", direct), ("close", close)) + ((("lattice", lattice),) if gap >= lattice_from else ()):
+            before, t = hydro.snapshots_solved, time.perf_counter()
+            timed[name] = (motion(*hydro._solved(bodies, half_turn=True)) if name == "direct" else
+                           motion(*hydro._snapshot(bodies)))
+            row[f"{name}_s"], row[f"{name}_snapshots"] = time.perf_counter() - t, hydro.snapshots_solved - before
+            if name != "direct":
+                row[f"{name}_grand"], row[f"{name}_flow"] = change(timed[name], timed["direct"])
+        if angle == 0.0 and gap in reference_gaps:
+            fine_bodies = [Body(fine, position=(0.0, 0.0, REST)), Body(fine, position=(*line, REST))]
+            t = time.perf_counter()
+            reference = motion(*fine_direct._solved(fine_bodies, half_turn=True))
+            row["reference_s"] = time.perf_counter() - t
+            own = motion(*fine_close._snapshot(fine_bodies))
+            row["reference_close_grand"], row["reference_close_flow"] = change(own, reference)
+            row["direct_vs_reference_grand"], row["direct_vs_reference_flow"] = change(timed["direct"], reference)
+            row["close_vs_reference_grand"], row["close_vs_reference_flow"] = change(timed["close"], reference)
+        rows.append(row)
+        print_table([row])
+        progress.done(f"close: {gap * 1e6:g} um apart at {np.degrees(angle):g} degrees")
+    return rows
+
+
 def main():
     parser = arguments(__doc__)
     parser.add_argument("--parts", nargs="+", default=["accuracy"],
                         choices=["accuracy", "resistance", "cutoff", "lattice", "reuse", "factors", "batch", "cost",
-                                 "implicit", "far"])
+                                 "implicit", "far", "close"])
     parser.add_argument("--runs", nargs="*", default=[], help="run files for --parts reuse")
     parser.add_argument("--k", type=int, default=2, help="sphere mesh subdivisions")
     parser.add_argument("--cells", nargs="*", type=int, default=[],
@@ -635,6 +687,13 @@ def main():
                                                        100e-6, 150e-6, 200e-6]
         rows = far_error(args.device, distances, args.k)
         print(f"wrote {write_csv('many_cells_far.csv', rows)}")
+    if "close" in args.parts:
+        along = [0.1e-6, 0.5e-6] if args.quick else [0.05e-6, 0.1e-6, 0.2e-6, 0.35e-6, 0.5e-6, 0.85e-6, 1e-6, 2e-6]
+        across = [] if args.quick else [0.35e-6, 0.85e-6, 2e-6]  # 30 degrees off the flow
+        cases = [(0.0, g) for g in along] + [(np.pi / 6, g) for g in across]
+        rows = close_error(args.device, cases, args.k, args.k + 1,
+                           [] if args.quick else [g for g in along if g >= 0.1e-6], 0.2e-6)
+        print(f"wrote {write_csv('many_cells_close.csv', rows)}")
     if "reuse" in args.parts:
         rows, progress = [], Progress(len(args.runs))
         for path in args.runs:

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import warpbem as wb
-from warpbem.dynamics.close_pairs import generalised, lattice_gap
+from warpbem.dynamics.close_pairs import generalised, lattice_gap, with_films
 from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion
 from warpbem.dynamics.model import Flow, Model, SolverOptions, build_solver
 from warpbem.hydro import two_spheres
@@ -86,3 +86,32 @@ def test_far_below_its_lattice_the_squeeze_follows_jeffrey_and_onishi():
     assert relative(q) == pytest.approx(relative(exact), rel=2e-2)
     alone, _ = motion(*solves(wall=False, **EXACT, grand_mobility="pairs", pair_cutoff=0.0)._snapshot(bodies))
     assert relative(q) < 0.03 * relative(alone)
+
+
+def test_films_are_added_to_the_assembled_resistance():
+    """with_films gives M = (Q^-1 + sum P^T L P)^-1 and u = M Q^-1 u_s (the holding loads kept)
+    for a smooth grand mobility Q of four cells and films between cells 0-1 and 1-2, against the
+    inverses formed directly; cell 3, in no film, keeps its own rows but feels the others' change."""
+    rng = np.random.default_rng(1)
+    n, radii = 4, np.array([1.0, 1.5, 2.0, 2.5]) * 1e-6
+    basis = rng.normal(size=(6 * n, 6 * n))
+    q = basis @ basis.T / (6 * n) + np.eye(6 * n)
+    u = rng.normal(size=6 * n)
+    films = []
+    for i, j in ((0, 1), (1, 2)):
+        half = rng.normal(size=(12, 3))
+        films.append((i, j, 5.0 * half @ half.T))  # positive semidefinite, rank 3 as a film's singular part
+    resistance = np.linalg.inv(q)
+    for i, j, film in films:
+        rows = np.concatenate([6 * i + np.arange(6), 6 * j + np.arange(6)])
+        resistance[np.ix_(rows, rows)] += film
+    expected_q = np.linalg.inv(resistance)
+    expected_u = expected_q @ np.linalg.solve(q, u)
+    by_cell, flow = q.reshape(6 * n, n, 6), u.reshape(n, 6)
+    parts = (flow[:, :3], flow[:, 3:] / radii[:, None], by_cell[:, :, :3], by_cell[:, :, 3:] / radii[None, :, None])
+    velocity, angular, basis_velocity, basis_angular = with_films(*parts, radii, films)
+    got_q = np.concatenate([basis_velocity, basis_angular * radii[None, :, None]], axis=2).reshape(6 * n, 6 * n)
+    got_u = np.concatenate([velocity, angular * radii[:, None]], axis=1).ravel()
+    assert np.abs(got_q - expected_q).max() < 1e-12 * np.abs(expected_q).max()
+    assert np.abs(got_u - expected_u).max() < 1e-12 * np.abs(expected_u).max()
+    assert np.abs(got_q - q).max() > 1e-2 * np.abs(q).max()  # the films matter

@@ -1,6 +1,6 @@
 """Two equal spherical cells near contact: their pair snapshot from the exact two-sphere
-resistance plus a smooth remainder on a coarse lattice of gaps and angles
-(``SolverOptions.close_pairs = "lubrication"``).
+resistance plus the wall's part on a coarse lattice of gaps, and their films added in resistance
+among many cells (``SolverOptions.close_pairs = "lubrication"``).
 
 Near contact the resistance of two spheres diverges in the gap eps between their surfaces, as
 a / eps for the squeeze along the line of centres and as ln(a / eps) for the sliding and rolling
@@ -9,7 +9,7 @@ pair snapshot changes at every step as two cells close, and the bilinear lattice
 ``pairwise.py`` (250 nm at contact) would straddle the film. The resistance of the pair above the
 wall is written
 
-    R(eps, theta) = R_JO(eps, d) + W(eps, theta),
+    R(eps) = R_JO(eps, d) + W(eps),
 
 R_JO the exact resistance of the two spheres alone in unbounded fluid (``hydro/two_spheres.py``,
 at the cells' own line of centres) and W what the wall adds. The film is the same with and without
@@ -36,6 +36,20 @@ vanishes as eps while the squeeze resistance grows as 1 / eps), interpolated lik
 u = Q f. So one gap of the lattice costs two pair snapshots and no lattice of angles is needed;
 what the turn leaves out is the mesh's own lack of symmetry under it (3e-4 of the grand mobility
 of two k = 3 cells 0.5-2 um apart turned by pi / 32 and pi / 16, against their direct solve).
+
+Among more cells the films add in resistance, not in mobility: a cell between two neighbours
+near contact is held by both films, which the pairwise sum of mobilities cannot give (three 5 um
+cells 0.5 um apart in a line: 0.11 of the grand mobility and 0.037 of the flow's motion off the
+whole system's solve, ``benchmarks/many_cells.py --parts accuracy``). So each close pair enters
+the pairwise sum (``pairwise.py``) with its film taken out of its resistance, smooth in the gap,
+
+    L(eps) = S(eps) - S(CLOSE_GAP_SHARE a),      M_pair = (R_JO - L + W)^-1,
+
+S the terms of R_JO that diverge at contact (``two_spheres.singular_resistance_matrix``), L
+positive semidefinite and zero where the pair stops being close, and the films are added back to
+the assembled resistance of all the cells, M = (M_sum^-1 + sum L)^-1 (``with_films``: Stokesian
+dynamics' split of the resistance into a many-body far part and pairwise lubrication, Durlofsky,
+Brady & Bossis 1987, J. Fluid Mech. 180:21). For two cells this is their pair snapshot again.
 
 Pairs of cells farther apart than CLOSE_GAP_SHARE radii between their surfaces, or of different
 radii, take the pairs' lateral lattice (``pairwise.py``).
@@ -138,10 +152,26 @@ class ClosePairs:
             # across snapshot, turned into its own frame, is the response to -e_y'
             hold += weight * (np.cos(angle) * hold_along + np.sin(angle) * hold_across)
         own_line = (lateral, 0.0, line[2])
-        q = np.linalg.inv(generalised(two_spheres.resistance_matrix(self.viscosity, a, own_line), a) + wall_part)
+        smooth = two_spheres.resistance_matrix(self.viscosity, a, own_line) - self._film(a, own_line)
+        q = np.linalg.inv(generalised(smooth, a) + wall_part)
         q = 0.5 * (q + q.T)
         rotation = turn(angle)
         return snapshot_parts(rotation @ q @ rotation.T, rotation @ (q @ hold), a) + (swapped, mirrored)
+
+    def film(self, bodies, i: int, j: int) -> np.ndarray:
+        """(12, 12) the film's resistance L between the close cells (i, j), in that order, in the
+        snapshots' generalised coordinates (module docstring)."""
+        a = float(self.radii[i])
+        return generalised(self._film(a, np.asarray(bodies[j].position, float) - np.asarray(bodies[i].position, float)), a)
+
+    def _film(self, a: float, line) -> np.ndarray:
+        """L (SI) of two spheres of radius ``a`` along ``line``: the terms of Jeffrey & Onishi's
+        resistance that diverge at contact less their value at CLOSE_GAP_SHARE radii, so that it
+        vanishes where the pair stops being close."""
+        line = np.asarray(line, float)
+        edge = line / np.linalg.norm(line) * (2.0 + CLOSE_GAP_SHARE) * a
+        return (two_spheres.singular_resistance_matrix(self.viscosity, a, line)
+                - two_spheres.singular_resistance_matrix(self.viscosity, a, edge))
 
     def _point(self, bodies, cells, heights, gap_index: int, a: float, across: bool):
         """(W (12, 12), holding loads of the flow along and across (12,) each) at a gap of the
@@ -190,3 +220,29 @@ def _gap_weights(gap: float):
     lower = max(0, int(np.floor(np.log(gap / GAP_SMALLEST_SHARE) / np.log(GAP_STEP) + ROUND_OFF)))
     share = (gap - lattice_gap(lower)) / (lattice_gap(lower + 1) - lattice_gap(lower))
     return (lower, 1.0 - share), (lower + 1, share)
+
+
+def with_films(velocity, angular, basis_velocity, basis_angular, radii, films):
+    """The flow's motion (n, 3) each and the basis's (6n, n, 3) each of cells whose smooth parts
+    are these, with the films' resistances added: ``films`` ((i, j, L (12, 12)) per close pair).
+    The smooth grand mobility Q (generalised: (U, a Omega) of (F, T / a)) and the films' L
+    combine as (Q^-1 + P^T L P)^-1 = Q - Q P^T (I + L P Q P^T)^-1 L P Q (Woodbury; P the close
+    cells' rows, L positive semidefinite, so nothing is inverted but a matrix of their size), and
+    the flow's motion u = Q f (f the holding loads, on which films between cells held still do
+    no work) becomes u - Q P^T (I + L P Q P^T)^-1 L P u."""
+    n = len(radii)
+    q = np.concatenate([basis_velocity, basis_angular * radii[None, :, None]], axis=2).reshape(6 * n, 6 * n)
+    u = np.concatenate([velocity, angular * radii[:, None]], axis=1).ravel()
+    cells = sorted({c for i, j, _ in films for c in (i, j)})
+    where = {c: k for k, c in enumerate(cells)}
+    rows = (6 * np.array(cells)[:, None] + np.arange(6)).ravel()
+    film = np.zeros((len(rows), len(rows)))
+    for i, j, pair_film in films:
+        pair_rows = np.concatenate([6 * where[i] + np.arange(6), 6 * where[j] + np.arange(6)])
+        film[np.ix_(pair_rows, pair_rows)] += pair_film
+    damped = np.eye(len(rows)) + film @ q[np.ix_(rows, rows)]
+    correction = q[:, rows] @ np.linalg.solve(damped, film @ np.concatenate([q[rows], u[rows, None]], axis=1))
+    q, u = q - correction[:, :-1], u - correction[:, -1]
+    q = 0.5 * (q + q.T)
+    by_cell, u = q.reshape(6 * n, n, 6), u.reshape(n, 6)
+    return (u[:, :3], u[:, 3:] / radii[:, None], by_cell[:, :, :3].copy(), by_cell[:, :, 3:] / radii[None, :, None])

@@ -55,7 +55,7 @@ import numpy as np
 
 from ..hydro.options import NEAR_RADII
 from ..surfaces.body import Body
-from .close_pairs import ClosePairs
+from .close_pairs import ClosePairs, with_films
 from .far_field import FarField
 from .many_body import ManyBodyRemainder
 
@@ -181,7 +181,7 @@ class PairwiseMobility:
         iterations, residual) of the free ``bodies``: each cell's lone snapshot at its fine
         height, plus the pairs' part, plus the many-body remainder if asked for
         (``many_body.py``)."""
-        velocity, angular, basis_velocity, basis_angular = self._pairs_part(bodies)
+        velocity, angular, basis_velocity, basis_angular, films = self._pairs_part(bodies)
         iterations, residual = 0, 0.0
         for b, (flow, grand) in self._lone_snapshots(bodies, self.hydro.tolerance).items():
             velocity[b] += flow.velocity[0]
@@ -194,6 +194,9 @@ class PairwiseMobility:
         if self.remainder is not None:
             for total, part in zip((velocity, angular, basis_velocity, basis_angular), self.remainder.parts(bodies)):
                 total += part
+        if films:  # the close pairs' films, added in resistance (close_pairs.py)
+            velocity, angular, basis_velocity, basis_angular = with_films(
+                velocity, angular, basis_velocity, basis_angular, self.radii, films)
         return velocity, angular, basis_velocity, basis_angular, iterations, residual
 
     def _pairs_part(self, bodies):
@@ -213,8 +216,9 @@ class PairwiseMobility:
         lattice = near & ~close
         if np.any(lattice):
             rows[lattice] = self._pair_rows(bodies, first[lattice], second[lattice], offsets[lattice])
+        films = []
         if np.any(close):  # near contact: the two-sphere resistance plus the wall's part (close_pairs.py)
-            rows[close] = self._close_rows(bodies, first[close], second[close])
+            rows[close], films = self._close_rows(bodies, first[close], second[close])
         if not np.all(near):  # the far pairs add their coupling to the cells alone (far_field.py)
             rows[~near] = self.far.rows(bodies, first[~near], second[~near], offsets[~near])
         flow_v, flow_w, grand_v, grand_w = (part.reshape((-1,) + shape) for part, shape in
@@ -240,7 +244,7 @@ class PairwiseMobility:
             by_cells_v[b, b] -= pairs_of[b] * lone_grand.velocity[:, 0]
             by_cells_w[b, b] -= pairs_of[b] * lone_grand.angular_velocity[:, 0]
         basis_velocity, basis_angular = (a.transpose(0, 2, 1, 3).reshape(6 * n, n, 3) for a in (by_cells_v, by_cells_w))
-        return velocity, angular, basis_velocity, basis_angular
+        return velocity, angular, basis_velocity, basis_angular, films
 
     def _lone_snapshots(self, bodies, spacing: float, cells=None):
         """{cell: its lone snapshot} of ``cells`` (default all) at their heights snapped to
@@ -301,20 +305,22 @@ class PairwiseMobility:
             rows[p] = self._solved_row(bodies, first[p], second[p])
         return rows
 
-    def _close_rows(self, bodies, first, second) -> np.ndarray:
-        """(P, row) the snapshots of the close pairs (first[p], second[p]) as rows (part_row):
-        from the two-sphere resistance and the wall's part on its lattice at the pair lattice's
-        heights (close_pairs.py); a pair one of whose lattice points is not a valid placement is
-        solved as it is."""
+    def _close_rows(self, bodies, first, second):
+        """((P, row) the smooth parts of the close pairs (first[p], second[p]) as rows (part_row),
+        [(i, j, the film's resistance L)] of each): from the two-sphere resistance and the wall's
+        part on its lattice at the pair lattice's heights, the film taken out (close_pairs.py);
+        a pair one of whose lattice points is not a valid placement is solved as it is, whole,
+        with no film."""
         d = self.hydro.interaction
         heights = np.round(np.array([b.position[2] for b in bodies]) / d) * d
-        rows = np.zeros((len(first), sum(PART_SIZES)))
+        rows, films = np.zeros((len(first), sum(PART_SIZES))), []
         for p, (i, j) in enumerate(zip(first.tolist(), second.tolist())):
             try:
                 rows[p] = part_row(*self.close.parts(bodies, i, j, heights))
+                films.append((i, j, self.close.film(bodies, i, j)))
             except TooClose:
                 rows[p] = self._solved_row(bodies, i, j)
-        return rows
+        return rows, films
 
     def _solved_row(self, bodies, i: int, j: int) -> np.ndarray:
         """The part_row of the pair (i, j) solved as it is (not kept)."""
