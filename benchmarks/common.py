@@ -37,8 +37,9 @@ def output(name: str) -> Path:
 
 def write_csv(name: str, rows: list[dict]) -> Path:
     path = output(name)
+    fields = list(dict.fromkeys(k for row in rows for k in row))  # rows may hold different columns
     with path.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer = csv.DictWriter(f, fieldnames=fields, restval="")
         writer.writeheader()
         writer.writerows(rows)
     return path

@@ -4,7 +4,9 @@
    height (heights spread by +-20 nm) against the whole system's solve, in the norm of
    ``benchmarks/adhesion.py`` part 2c (largest change over largest entry), from
    - the pairs (``[solver] grand_mobility = "pairs"``, dynamics/pairwise.py) at the cells' own
-     positions, every pair from its snapshot ("pairwise": the approximation alone), the pairs
+     positions, every pair from its snapshot ("pairwise": the approximation alone, close pairs
+     with their films added in resistance; "pairwise_no_films": every pair's mobility summed,
+     ``close_pairs = "lattice"``), the pairs
      beyond the near radius from the far field ("pairs_far", dynamics/far_field.py: the
      solver's default), and on the default lattices ("pairs_lattices");
    - the pairs with ``[solver] many_body = "coarse"`` (dynamics/many_body.py) at the cells' own
@@ -208,6 +210,8 @@ def accuracy(device, cases, k, refinement=None, extras=True):
                    refinement=hydro.model.solver.contact_refinement, system_s=t_system)
         approximations = {}
         for name, options in (("pairwise", dict(EXACT, grand_mobility="pairs", far_field="none")),
+                              ("pairwise_no_films", dict(EXACT, grand_mobility="pairs", far_field="none",
+                                                         close_pairs="lattice")),
                               ("pairs_far", dict(EXACT, grand_mobility="pairs")),
                               ("pairs_lattices", dict(reuse_tolerance=2e-9, grand_mobility="pairs")),
                               ("pairs_remainder", dict(EXACT, grand_mobility="pairs", many_body="coarse"))):

@@ -38,10 +38,9 @@ what the turn leaves out is the mesh's own lack of symmetry under it (3e-4 of th
 of two k = 3 cells 0.5-2 um apart turned by pi / 32 and pi / 16, against their direct solve).
 
 Among more cells the films add in resistance, not in mobility: a cell between two neighbours
-near contact is held by both films, which the pairwise sum of mobilities cannot give (three 5 um
-cells 0.5 um apart in a line: 0.11 of the grand mobility and 0.037 of the flow's motion off the
-whole system's solve, ``benchmarks/many_cells.py --parts accuracy``). So each close pair enters
-the pairwise sum (``pairwise.py``) with its film taken out of its resistance, smooth in the gap,
+near contact is held by both films, which the pairwise sum of mobilities cannot give. So each
+close pair enters the pairwise sum (``pairwise.py``) with its film taken out of its resistance,
+smooth in the gap,
 
     L(eps) = S(eps) - S(CLOSE_GAP_SHARE a),      M_pair = (R_JO - L + W)^-1,
 
@@ -50,6 +49,12 @@ positive semidefinite and zero where the pair stops being close, and the films a
 the assembled resistance of all the cells, M = (M_sum^-1 + sum L)^-1 (``with_films``: Stokesian
 dynamics' split of the resistance into a many-body far part and pairwise lubrication, Durlofsky,
 Brady & Bossis 1987, J. Fluid Mech. 180:21). For two cells this is their pair snapshot again.
+Three 5 um k = 3 cells in a line at the rolling height, against their whole system's solve
+(grand mobility / flow's motion; a script of the session that wrote this, the norm of
+``benchmarks/many_cells.py --parts accuracy``): 0.5 um between the surfaces 1.1e-2 / 1.9e-2 (the
+mobilities summed without films: 0.11 / 3.7e-2), 1 um 1.6e-2 / 1.8e-2 (6.6e-2 / 3.0e-2), 2 um
+2.5e-2 / 1.8e-2 (3.6e-2 / 2.1e-2). What is left is the three-body part of the smooth rest, the
+middle cell screening the outer two.
 
 Pairs of cells farther apart than CLOSE_GAP_SHARE radii between their surfaces, or of different
 radii, take the pairs' lateral lattice (``pairwise.py``).

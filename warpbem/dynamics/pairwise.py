@@ -44,7 +44,10 @@ as r^-5, so the lattice spacing grows as (r / r0)^(5/2) from ``pair_lateral`` at
 of the outer radii (contact), in steps of 2 and at most r / 8: the interpolation error is then
 about the same at every distance. The pairs' heights stay snapped to ``reuse_interaction``, as
 the whole system's, with each cell's self part moved to its fine height by its lone snapshots.
-Pairs farther apart than ``pair_cutoff`` are left out; the flow's coupling sums slowly over a
+Two equal cells less than half a radius apart leave this lattice for the close pairs'
+(``close_pairs.py``): the exact two-sphere resistance at their own gap plus the wall's part on a
+lattice of gaps, their films added to the assembled resistance after the sum. Pairs farther
+apart than ``pair_cutoff`` are left out; the flow's coupling sums slowly over a
 patch (r^-3 per pair, r pairs per ring), so the default keeps every pair of a patch up to 1 mm
 wide.
 """
@@ -194,7 +197,7 @@ class PairwiseMobility:
         if self.remainder is not None:
             for total, part in zip((velocity, angular, basis_velocity, basis_angular), self.remainder.parts(bodies)):
                 total += part
-        if films:  # the close pairs' films, added in resistance (close_pairs.py)
+        if films:  # the close pairs' films, added in resistance to all of the above (close_pairs.py)
             velocity, angular, basis_velocity, basis_angular = with_films(
                 velocity, angular, basis_velocity, basis_angular, self.radii, films)
         return velocity, angular, basis_velocity, basis_angular, iterations, residual

@@ -198,9 +198,9 @@ class SolverOptions:
     close_pairs: str = option("lubrication", "with grand_mobility = 'pairs', two equal spherical cells less than half a"
                               " radius apart: 'lubrication' takes their pair snapshot from the exact two-sphere"
                               " resistance (Jeffrey & Onishi 1984) plus the wall's part on a coarse lattice of gaps"
-                              " (0.1 radius x 2^(k/2)) and angles (dynamics/close_pairs.py); 'lattice' from the pair"
-                              " lattice of pair_lateral, solving the pair as it is where a lattice point is too"
-                              " near", choices=CLOSE_PAIRS)
+                              " (0.1 radius x 2^(k/2)), their films added in resistance among more cells"
+                              " (dynamics/close_pairs.py); 'lattice' from the pair lattice of pair_lateral, solving"
+                              " the pair as it is where a lattice point is too near", choices=CLOSE_PAIRS)
     pair_cutoff: float = option(DEFAULT_PAIR_CUTOFF, "with grand_mobility = 'pairs', pairs of cells farther apart"
                                 " along the wall than this do not interact", "m", low=0.0, high=1e-2)
     far_field: str = option("moments", "with grand_mobility = 'pairs', the pairs farther apart than near_radius:"
