@@ -67,7 +67,8 @@
    GMRES on (I + dt A Q) s = b, products O(p^2)) and from the matrix formed and factored by
    Cholesky (O(p^3), before it), interleaved cell count by cell count.
 
-    python benchmarks/many_cells.py [--parts accuracy resistance cutoff far close lattice reuse factors batch cost implicit]
+    python benchmarks/many_cells.py
+        [--parts accuracy resistance cutoff far close lattice reuse factors batch cost implicit]
         [--runs RUN.h5 ...] [--quick]
         [--cells N ...] [--system-cells N ...] [--remainder-cells N ...] [--cases KIND:N:UM ...]
         [--refinement R] [--solver-paths] [--device cuda:0]
@@ -623,7 +624,8 @@ def close_error(device, cases, k, reference_k, reference_gaps, lattice_from):
         bodies = [Body(mesh, position=(0.0, 0.0, REST)), Body(mesh, position=(*line, REST))]
         row = dict(angle_deg=np.degrees(angle), gap_um=gap * 1e6, k=k)
         timed = {}
-        for name, hydro in (("direct", direct), ("close", close)) + ((("lattice", lattice),) if gap >= lattice_from else ()):
+        paths = (("direct", direct), ("close", close)) + ((("lattice", lattice),) if gap >= lattice_from else ())
+        for name, hydro in paths:
             before, t = hydro.snapshots_solved, time.perf_counter()
             timed[name] = (motion(*hydro._solved(bodies, half_turn=True)) if name == "direct" else
                            motion(*hydro._snapshot(bodies)))

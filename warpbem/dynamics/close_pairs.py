@@ -167,7 +167,8 @@ class ClosePairs:
         """(12, 12) the film's resistance L between the close cells (i, j), in that order, in the
         snapshots' generalised coordinates (module docstring)."""
         a = float(self.radii[i])
-        return generalised(self._film(a, np.asarray(bodies[j].position, float) - np.asarray(bodies[i].position, float)), a)
+        line = np.asarray(bodies[j].position, float) - np.asarray(bodies[i].position, float)
+        return generalised(self._film(a, line), a)
 
     def _film(self, a: float, line) -> np.ndarray:
         """L (SI) of two spheres of radius ``a`` along ``line``: the terms of Jeffrey & Onishi's
