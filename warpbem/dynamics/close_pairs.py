@@ -50,8 +50,8 @@ the assembled resistance of all the cells, M = (M_sum^-1 + sum L)^-1 (``with_fil
 dynamics' split of the resistance into a many-body far part and pairwise lubrication, Durlofsky,
 Brady & Bossis 1987, J. Fluid Mech. 180:21). For two cells this is their pair snapshot again.
 Three 5 um k = 3 cells in a line at the rolling height, against their whole system's solve
-(grand mobility / flow's motion; a script of the session that wrote this, the norm of
-``benchmarks/many_cells.py --parts accuracy``): 0.5 um between the surfaces 1.1e-2 / 1.9e-2 (the
+(grand mobility / flow's motion; ``benchmarks/many_cells.py --parts accuracy --solver-paths --k 3
+--cases line:3:10.5 line:3:11 line:3:12``): 0.5 um between the surfaces 1.1e-2 / 1.9e-2 (the
 mobilities summed without films: 0.11 / 3.7e-2), 1 um 1.6e-2 / 1.8e-2 (6.6e-2 / 3.0e-2), 2 um
 2.5e-2 / 1.8e-2 (3.6e-2 / 2.1e-2). What is left is the three-body part of the smooth rest, the
 middle cell screening the outer two.
