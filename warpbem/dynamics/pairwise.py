@@ -183,7 +183,7 @@ class PairwiseMobility:
         """(flow velocity, angular velocity (n, 3); basis velocity, angular velocity (6n, n, 3),
         iterations, residual) of the free ``bodies``: each cell's lone snapshot at its fine
         height, plus the pairs' part, plus the many-body remainder if asked for
-        (``many_body.py``)."""
+        (``many_body.py``), the close pairs' films then added in resistance (``close_pairs.py``)."""
         velocity, angular, basis_velocity, basis_angular, films = self._pairs_part(bodies)
         iterations, residual = 0, 0.0
         for b, (flow, grand) in self._lone_snapshots(bodies, self.hydro.tolerance).items():
