@@ -59,20 +59,3 @@ def test_the_store_drops_the_least_recently_used_factors_beyond_its_budget():
     assert store.get("b") is None and store.get("a") is block and store.get("c") is block
     store.put("large", (np.zeros((20, 20)), np.zeros(20)))  # 3360 bytes, over the whole budget: not kept
     assert store.get("large") is None and store.get("a") is block
-
-
-def test_a_block_lapack_cannot_index_goes_unfactored_and_the_motion_stays(monkeypatch):
-    """Every body's block is factored for a system solved for many loads, but a block LAPACK
-    cannot index (LAPACK_ROWS: two k = 4 quadratic cells 0.05 um apart crashed its LU) or that
-    would not fit is left to GMRES: no factor, no store entry, and the motion of a pair is that
-    of the factored solve to GMRES's tolerance."""
-    from warpbem.hydro import completed_double_layer
-
-    pair = [(0.0, 0.0, 1.3), (2.5, 0.4, 1.4)]
-    factored = solved(MobilitySolver(shear_rate=1.0, keep_systems=False), pair)
-    monkeypatch.setattr(completed_double_layer, "LAPACK_ROWS", 10)
-    solver = MobilitySolver(shear_rate=1.0)
-    unfactored = solved(solver, pair)
-    assert (solver._factors.hits, solver._factors.misses) == (0, 0)
-    np.testing.assert_allclose(unfactored, factored, rtol=1e-6, atol=1e-8)
-    assert not completed_double_layer.factorable(10**6)  # 8 TB as a dense matrix

@@ -52,13 +52,8 @@ from .block_factors import BlockFactors, block_key
 from .deflated import RigidModes, deflated_operator
 from .geometry import SurfaceGeometry
 from .operators import DiscreteOperator, dof_indices
-from .operators.forms import choose_mode
 
 FACTOR_LIMIT = 1800  # unknowns (600 elements): largest moving body block factored for GMRES
-# LAPACK's LU (getrf) indexes the matrix with 32-bit integers: a block of more rows than this
-# (n^2 >= 2^31) crashed it (two k = 4 quadratic cells 0.05 um apart above the wall, their blocks
-# refined near contact: a segmentation fault in scipy.linalg.lu_factor)
-LAPACK_ROWS = 46340
 FORCE_UNIT = 6.0 * np.pi  # scaled force of a unit-speed unit sphere; scales the load unknowns
 TORQUE_UNIT = 8.0 * np.pi
 
@@ -277,7 +272,7 @@ class CompletedDoubleLayer:
         and 0.31 s in 14 plain GMRES iterations).
         Matrix-free operators assemble each body's block alone for it (DiscreteOperator.
         diagonal_blocks), so large scenes keep the preconditioner. ``every_body``: factor every
-        body's block that is ``factorable``, for a system solved for many loads (a pair snapshot's 13
+        body's block whatever its size, for a system solved for many loads (a pair snapshot's 13
         solves: a refined 5 um cell's block of 3663 unknowns factors in about 1 s, and cuts GMRES
         from about 30 iterations per solve; dynamics/pairwise.py). ``factors``: a solver's store
         of free bodies' factors by shape and height (``block_factors.py``), which a moved body
@@ -288,8 +283,8 @@ class CompletedDoubleLayer:
         kept = [p < len(old) and old[p] is not None and self.unchanged[p] and previous.fixed[p] == self.fixed[p]
                 for p in range(len(self.ranges))]
         needed = [p for p, rows in enumerate(self.ranges)
-                  if not kept[p] and factorable(rows.stop - rows.start)
-                  and (every_body or (self.fixed[p] and kept_for_later) or rows.stop - rows.start <= FACTOR_LIMIT)]
+                  if not kept[p] and (every_body or (self.fixed[p] and kept_for_later)
+                                      or rows.stop - rows.start <= FACTOR_LIMIT)]
         keys = {p: self._block_key(p) for p in needed if factors is not None and not self.fixed[p]}
         stored = {p: found for p, key in keys.items() if (found := factors.get(key)) is not None}
         blocks = self.double_layer.diagonal_blocks([p for p in needed if p not in stored])
@@ -328,10 +323,3 @@ class CompletedDoubleLayer:
     def rigid_velocity(self, body: int, x: np.ndarray) -> np.ndarray:
         """(U, Omega) of a free body in scaled units: the rigid field -P_p q."""
         return -self.rigid.to_raw(body, self.rigid.coefficients(body, x))
-
-
-def factorable(rows: int) -> bool:
-    """Whether a body's block of ``rows`` unknowns may be factored on the host: LAPACK indexes it
-    (at most LAPACK_ROWS) and it fits as a dense matrix would (``choose_mode``: a quarter of the
-    memory; its LU takes as much again). A block beyond goes without, its body left to GMRES."""
-    return rows <= LAPACK_ROWS and choose_mode(rows) == "dense"
