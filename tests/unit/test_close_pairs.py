@@ -4,18 +4,14 @@ lattice of gaps (warpbem/dynamics/close_pairs.py, ``[solver] close_pairs = "lubr
 import numpy as np
 import pytest
 
-import warpbem as wb
 from warpbem.dynamics.close_pairs import generalised, lattice_gap, with_films
 from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion
 from warpbem.dynamics.model import Flow, Model, SolverOptions, build_solver
 from warpbem.hydro import two_spheres
 from warpbem.surfaces.body import Body
+from tests.unit.test_pairwise import A, EXACT, HEIGHT, MESH, motion, relative_change
 
-A = 2e-6
-MESH = wb.mesh.sphere(A, 2)
-HEIGHT = A + 236e-9
 VISCOSITY = 1e-3
-EXACT = dict(reuse_tolerance=1e-12, reuse_interaction=1e-12, pair_lateral=1e-12)  # lattices below round-off
 
 pytestmark = pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
 
@@ -23,15 +19,6 @@ pytestmark = pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarnin
 def solves(wall=True, **solver):
     model = Model([MESH] * 2, [False] * 2, Flow(100.0, VISCOSITY, wall=wall), solver=SolverOptions(**solver))
     return HydrodynamicSolves(model, build_solver(model.solver, model.flow, "cpu"))
-
-
-def motion(flow, grand):
-    """(grand mobility Q, the flow's velocity and angular velocity times A) of a snapshot."""
-    return grand.quadratic(), np.concatenate([flow.velocity.ravel(), flow.angular_velocity.ravel() * A])
-
-
-def relative_change(a, b):
-    return [np.abs(x - y).max() / np.abs(y).max() for x, y in zip(a, b)]
 
 
 def pair(gap, angle, wall=True):
