@@ -97,12 +97,15 @@ def snapshot_matrices(flow, grand, radius: float) -> tuple[np.ndarray, np.ndarra
     return grand.quadratic(), u
 
 
-def snapshot_parts(q: np.ndarray, u: np.ndarray, radius: float) -> tuple:
-    """The inverse of ``snapshot_matrices``: (flow velocity, angular velocity (2, 3), basis
-    velocity, angular velocity (12, 2, 3)), as HydrodynamicSolves._grand_mobility lays them out."""
-    by_cell = q.reshape(12, 2, 6)
-    u = u.reshape(2, 6)
-    return u[:, :3], u[:, 3:] / radius, by_cell[:, :, :3].copy(), by_cell[:, :, 3:] / radius
+def snapshot_parts(q: np.ndarray, u: np.ndarray, radii) -> tuple:
+    """The grand mobility Q (6n, 6n) and the flow's motion u (6n,) of n cells of ``radii`` ((n,)
+    m, or one radius), generalised as ``snapshot_matrices`` gives them, as (flow velocity,
+    angular velocity (n, 3), basis velocity, angular velocity (6n, n, 3)), the layout of
+    HydrodynamicSolves._grand_mobility."""
+    n = len(u) // 6
+    radii = np.broadcast_to(np.asarray(radii, float), (n,))
+    by_cell, u = q.reshape(6 * n, n, 6), u.reshape(n, 6)
+    return u[:, :3], u[:, 3:] / radii[:, None], by_cell[:, :, :3].copy(), by_cell[:, :, 3:] / radii[None, :, None]
 
 
 def turn(angle: float) -> np.ndarray:
@@ -249,6 +252,4 @@ def with_films(velocity, angular, basis_velocity, basis_angular, radii, films):
     damped = np.eye(len(rows)) + film @ q[np.ix_(rows, rows)]
     correction = q[:, rows] @ np.linalg.solve(damped, film @ np.concatenate([q[rows], u[rows, None]], axis=1))
     q, u = q - correction[:, :-1], u - correction[:, -1]
-    q = 0.5 * (q + q.T)
-    by_cell, u = q.reshape(6 * n, n, 6), u.reshape(n, 6)
-    return (u[:, :3], u[:, 3:] / radii[:, None], by_cell[:, :, :3].copy(), by_cell[:, :, 3:] / radii[None, :, None])
+    return snapshot_parts(0.5 * (q + q.T), u, radii)

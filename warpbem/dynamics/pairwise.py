@@ -286,9 +286,7 @@ class PairwiseMobility:
         it is (not kept). Arrays over the pairs: the points' rows are looked up again only for
         the pairs whose lattice square, spacing or heights changed since the last assembly (or
         that now need a point they did not), so a step of 64 cells, 2016 pairs, loops over few."""
-        hydro = self.hydro
-        d = hydro.interaction
-        heights = np.round(np.array([b.position[2] for b in bodies]) / d) * d
+        heights = self._pair_heights(bodies)
         spacings = lateral_spacing(np.hypot(offsets[:, 0], offsets[:, 1]), self.base,
                                    self.radii[first] + self.radii[second])
         points, weights = lattice_corners(offsets, spacings)
@@ -314,8 +312,7 @@ class PairwiseMobility:
         part on its lattice at the pair lattice's heights, the film taken out (close_pairs.py);
         a pair one of whose lattice points is not a valid placement is solved as it is, whole,
         with no film."""
-        d = self.hydro.interaction
-        heights = np.round(np.array([b.position[2] for b in bodies]) / d) * d
+        heights = self._pair_heights(bodies)
         rows, films = np.zeros((len(first), sum(PART_SIZES))), []
         for p, (i, j) in enumerate(zip(first.tolist(), second.tolist())):
             try:
@@ -324,6 +321,11 @@ class PairwiseMobility:
             except TooClose:
                 rows[p] = self._solved_row(bodies, i, j)
         return rows, films
+
+    def _pair_heights(self, bodies) -> np.ndarray:
+        """(n,) m the cells' heights on the pair lattice (``reuse_interaction``)."""
+        d = self.hydro.interaction
+        return np.round(np.array([b.position[2] for b in bodies]) / d) * d
 
     def _solved_row(self, bodies, i: int, j: int) -> np.ndarray:
         """The part_row of the pair (i, j) solved as it is (not kept)."""
