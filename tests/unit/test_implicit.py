@@ -21,7 +21,9 @@ def test_the_factored_response_takes_the_same_step_as_the_whole_one():
     V^T M V positive definite: the step from R = G V held whole (DenseResponse) and never formed
     (FactoredResponse) is the same minimiser of the same convex Phi, to the Newton tolerance;
     the hand-made G is also the one FactoredResponse.of builds from the unit loads, and the
-    Newton matrix's R^T K R is the whole one's for 3 x 3 and per-coordinate stiffnesses."""
+    Newton matrix's R^T K R is the whole one's for 3 x 3 and per-coordinate stiffnesses. The
+    coordinates, held per coordinate on its own cell, give the rates and loads of the unit loads
+    on every cell."""
     rng = np.random.default_rng(3)
     cells, bonds = 3, 12
     owner = np.repeat(np.arange(cells), bonds // cells)
@@ -31,14 +33,27 @@ def test_the_factored_response_takes_the_same_step_as_the_whole_one():
         for i in range(3):
             unit_force[3 * g + i, b, i] = 1.0
             unit_torque[3 * g + i, b] = np.cross(arm[g], np.eye(3)[i])
-    coordinates = ImplicitCoordinates(rng.normal(size=3 * bonds) * 40e-9, unit_force, unit_torque)
+    carriers = np.stack([np.repeat(owner, 3), np.full(3 * bonds, -1)], axis=1)
+    on_own_cell = np.arange(3 * bonds), np.repeat(owner, 3)
+    coordinates = ImplicitCoordinates(rng.normal(size=3 * bonds) * 40e-9, carriers,
+                                      np.stack([unit_force[on_own_cell], np.zeros((3 * bonds, 3))], axis=1),
+                                      np.stack([unit_torque[on_own_cell], np.zeros((3 * bonds, 3))], axis=1), cells)
     p = 6 * cells
     mobility = rng.normal(size=(p, p)) * 1e6
     mobility = mobility @ mobility.T / p + 1e6 * np.eye(p)  # m/(N s), SPD
     velocity = mobility.reshape(p, cells, 6)[:, :, :3]
     angular = mobility.reshape(p, cells, 6)[:, :, 3:] / 5e-6
     factored = FactoredResponse.of(coordinates, velocity, angular)
-    whole = np.array([coordinates.rates(u, w) for u, w in zip(velocity, angular)]).T
+    # R by virtual work from the loads on every cell, the coordinates' own rates alike
+    whole = np.einsum("cbi,pbi->cp", unit_force, velocity) + np.einsum("cbi,pbi->cp", unit_torque, angular)
+    np.testing.assert_allclose(np.array([coordinates.rates(u, w) for u, w in zip(velocity, angular)]).T, whole,
+                               rtol=1e-12, atol=1e-12 * np.abs(whole).max())
+    magnitudes = rng.normal(size=3 * bonds) * 1e-12
+    loads = coordinates.loads(magnitudes)  # and the loads of forces along them, by the same virtual work
+    np.testing.assert_allclose(loads.force, np.einsum("c,cbi->bi", magnitudes, unit_force), rtol=1e-12, atol=1e-30)
+    np.testing.assert_allclose(loads.torque, np.einsum("c,cbi->bi", magnitudes, unit_torque), rtol=1e-12, atol=1e-36)
+    np.testing.assert_array_equal(coordinates.dense_loads()[0], unit_force)
+    np.testing.assert_array_equal(coordinates.dense_loads()[1], unit_torque)
     np.testing.assert_allclose(factored.geometry @ factored.motion, whole, rtol=1e-12, atol=1e-12 * np.abs(whole).max())
     blocks = rng.normal(size=(bonds, 3, 3))
     blocks = blocks @ blocks.transpose(0, 2, 1)  # a bond's 3 x 3 stiffness, symmetric
@@ -87,7 +102,11 @@ def test_the_newton_step_without_its_matrix_is_the_formed_one():
         for i in range(3):
             unit_force[3 * g + i, g // 3, i] = 1.0
             unit_torque[3 * g + i, g // 3] = np.cross(arm, np.eye(3)[i])
-    coordinates = ImplicitCoordinates(rng.normal(size=3 * bonds) * 40e-9, unit_force, unit_torque)
+    carriers = np.stack([np.arange(3 * bonds) // 9, np.full(3 * bonds, -1)], axis=1)
+    on_own_cell = np.arange(3 * bonds), carriers[:, 0]
+    coordinates = ImplicitCoordinates(rng.normal(size=3 * bonds) * 40e-9, carriers,
+                                      np.stack([unit_force[on_own_cell], np.zeros((3 * bonds, 3))], axis=1),
+                                      np.stack([unit_torque[on_own_cell], np.zeros((3 * bonds, 3))], axis=1), cells)
     load_force, load_torque = np.zeros((p, cells, 3)), np.zeros((p, cells, 3))
     for b in range(cells):
         for i in range(3):

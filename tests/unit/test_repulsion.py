@@ -158,8 +158,8 @@ def test_contacts_carry_the_points_where_their_forces_act():
     bodies = [wb.Body(m, position=(0.0, 0.0, low)), wb.Body(m, position=(2 * a + 360e-9, 0.0, low))]
     contacts = Contacts(bodies, np.array([a, a]), True, GapFinder())
     coordinates = rep.implicit_coordinates(bodies, contacts, None, np.zeros((2, 3)), np.zeros((2, 3)), 1e-6)
-    joined = ImplicitCoordinates.join([ImplicitCoordinates(np.zeros(1), np.ones((1, 2, 3)), np.zeros((1, 2, 3))),
-                                       coordinates])
+    joined = ImplicitCoordinates.join([ImplicitCoordinates(np.zeros(1), np.array([[0, 1]]), np.ones((1, 2, 3)),
+                                                           np.zeros((1, 2, 3)), 2), coordinates])
     loads = joined.point_loads(np.concatenate([[5e-12], np.full(len(coordinates.values), 1e-10)]))
     pairs = {(b, o) for b, o, _, _ in loads}
     assert pairs == {(0, WALL), (1, WALL), (0, 1), (1, 0)}

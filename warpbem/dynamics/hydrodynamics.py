@@ -198,7 +198,8 @@ class HydrodynamicSolves:
             return snapshot[1], "bodies"
         if len(coordinates.values) <= 6 * len(self.free):
             mask = ~self.model.fixed_mask[:, None]
-            return self._responses(bodies, coordinates.unit_force * mask, coordinates.unit_torque * mask), "coordinates"
+            unit_force, unit_torque = coordinates.dense_loads()
+            return self._responses(bodies, unit_force * mask, unit_torque * mask), "coordinates"
         return self._grand_mobility(bodies), "bodies"
 
     def body_coefficients(self, force, torque) -> np.ndarray:

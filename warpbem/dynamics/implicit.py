@@ -96,14 +96,6 @@ class DenseResponse:
         return None
 
 
-def rate_geometry(coordinates):
-    """G (m, 6 n, sparse): the rate of each coordinate per unit rigid motion (velocity, angular
-    velocity) of each of the n bodies, from its unit loads (virtual work)."""
-    m, n = coordinates.unit_force.shape[:2]
-    return scipy.sparse.csr_matrix(np.concatenate([coordinates.unit_force, coordinates.unit_torque],
-                                                  axis=2).reshape(m, 6 * n))
-
-
 class FactoredResponse(DenseResponse):
     """R = G V, never formed: G (m, 6 n, sparse) the rate of each coordinate per unit rigid
     motion of each body (a bond moves with one cell, a contact with two), V (6 n, p) the motion
@@ -116,9 +108,9 @@ class FactoredResponse(DenseResponse):
     @classmethod
     def of(cls, coordinates, velocity, angular_velocity) -> "FactoredResponse":
         """From the coordinates' unit loads (m, n, 3) and the basis's motions (p, n, 3)."""
-        n = coordinates.unit_force.shape[1]
+        n = coordinates.n_bodies
         motion = np.concatenate([velocity, angular_velocity], axis=2).reshape(-1, 6 * n).T
-        return cls(rate_geometry(coordinates), motion)
+        return cls(coordinates.rate_geometry(), motion)
 
     def __matmul__(self, z):
         return self.geometry @ (self.motion @ z)
@@ -182,13 +174,13 @@ class MobilityResponse(FactoredResponse):
         mobility ``quadratic`` (6 n, 6 n) and the basis's loads (6 n, n, 3 each), which must be
         one component each, load k on the k-th of the bodies' 6 n degrees of freedom (force x,
         y, z, torque x, y, z of each body in turn): D is one over each load's magnitude."""
-        n = coordinates.unit_force.shape[1]
+        n = coordinates.n_bodies
         loads = np.concatenate([load_force, load_torque], axis=2).reshape(-1, 6 * n)
         if (quadratic.shape != (6 * n, 6 * n) or loads.shape != (6 * n, 6 * n) or np.count_nonzero(loads) != 6 * n
                 or np.any(np.diag(loads) == 0.0)):
             raise ValueError(f"MobilityResponse takes the basis of one load per degree of freedom of {n} free bodies,"
                              f" in their order, and its ({6 * n}, {6 * n}) grand mobility")
-        return cls(rate_geometry(coordinates), quadratic, 1.0 / np.diag(loads))
+        return cls(coordinates.rate_geometry(), quadratic, 1.0 / np.diag(loads))
 
     def newton_step(self, z, force, stiffness, dt):
         """The Newton step s of the class docstring at coefficients ``z`` with forces ``force`` and

@@ -42,7 +42,8 @@ of two ways:
 
   with r the rates of the coordinates without the stiff laws and B the response of the rates to
   unit forces (symmetric by reciprocity). By virtual work the rate of a coordinate under rigid
-  motions (U_b, Omega_b) is sum_b unit_force_cb . U_b + unit_torque_cb . Omega_b, so the same
+  motions (U_b, Omega_b) is sum_b unit_force_cb . U_b + unit_torque_cb . Omega_b (over the one or
+  two bodies b the coordinate acts on), so the same
   unit loads give both. The frame records the law at the state itself, f(s_c).
 
 An interaction that carries state of its own (a bond table, a counter) declares it in
@@ -87,23 +88,35 @@ class Loads:
 
 @dataclass(frozen=True)
 class ImplicitCoordinates:
-    """Coordinates s_c (m) of an implicit interaction at one state, and the loads on every body of
-    a unit (1 N) force along each: ``unit_force``, ``unit_torque`` (m, n_bodies, 3); ``points``
-    (m, n_bodies, 3; NaN where a body takes no load) where the unit force acts on each body's
-    surface, for the contact loads that deform cells, or None where that does not apply."""
+    """Coordinates s_c (m) of an implicit interaction at one state, and the loads of a unit (1 N)
+    force along each on the one or two bodies it acts on (a bond: its cell, and the fixed cell
+    that carries its ligand; a contact: its two bodies, or one and the wall): ``bodies`` (m, 2)
+    their indices, -1 (``WALL``) for none; ``unit_force``, ``unit_torque`` (m, 2, 3) on each
+    (zero where there is none); ``points`` (m, 2, 3; NaN where a body takes no load) where the
+    unit force acts on each body's surface, for the contact loads that deform cells, or None where
+    that does not apply; ``n_bodies`` the model's bodies. Held per coordinate, not per coordinate
+    and body, so that thousands of bonds on hundreds of cells cost O(m), not O(m n), per step
+    (the rate geometry, the loads and the rates alike)."""
 
     values: np.ndarray
+    bodies: np.ndarray
     unit_force: np.ndarray
     unit_torque: np.ndarray
+    n_bodies: int
     points: np.ndarray | None = None
+
+    def _on(self, per_body: np.ndarray) -> np.ndarray:
+        """(m, 2, 3) each coordinate's bodies' rows of ``per_body`` (n, 3), zero where it has none."""
+        return np.where((self.bodies >= 0)[:, :, None], per_body[np.maximum(self.bodies, 0)], 0.0)
 
     def rates(self, velocity: np.ndarray, angular_velocity: np.ndarray) -> np.ndarray:
         """ds_c/dt (m/s) for the rigid motions of the bodies (virtual work)."""
-        return (np.einsum("cbi,bi->c", self.unit_force, velocity)
-                + np.einsum("cbi,bi->c", self.unit_torque, angular_velocity))
+        return (np.einsum("cki,cki->c", self.unit_force, self._on(velocity))
+                + np.einsum("cki,cki->c", self.unit_torque, self._on(angular_velocity)))
 
     def part(self, where: slice) -> "ImplicitCoordinates":
-        return ImplicitCoordinates(self.values[where], self.unit_force[where], self.unit_torque[where],
+        return ImplicitCoordinates(self.values[where], self.bodies[where], self.unit_force[where],
+                                   self.unit_torque[where], self.n_bodies,
                                    None if self.points is None else self.points[where])
 
     @classmethod
@@ -114,13 +127,37 @@ class ImplicitCoordinates:
             points = np.concatenate([np.full(x.unit_force.shape, np.nan) if x.points is None else x.points
                                      for x in items])
         return cls(*(np.concatenate([getattr(x, name) for x in items])
-                     for name in ("values", "unit_force", "unit_torque")), points)
+                     for name in ("values", "bodies", "unit_force", "unit_torque")), items[0].n_bodies, points)
+
+    def dense_loads(self) -> tuple[np.ndarray, np.ndarray]:
+        """(unit_force, unit_torque) on every body, (m, n_bodies, 3) each: for a few coordinates."""
+        force, torque = (np.zeros((len(self.values), self.n_bodies, 3)) for _ in range(2))
+        rows, slots = np.nonzero(self.bodies >= 0)
+        np.add.at(force, (rows, self.bodies[rows, slots]), self.unit_force[rows, slots])
+        np.add.at(torque, (rows, self.bodies[rows, slots]), self.unit_torque[rows, slots])
+        return force, torque
+
+    def rate_geometry(self):
+        """G (m, 6 n, scipy.sparse CSR): the rate of each coordinate per unit rigid motion
+        (velocity, angular velocity) of each body, from its unit loads (virtual work)."""
+        import scipy.sparse
+
+        rows, slots = np.nonzero(self.bodies >= 0)
+        entries = np.concatenate([self.unit_force[rows, slots], self.unit_torque[rows, slots]], axis=1)  # (k, 6)
+        columns = 6 * self.bodies[rows, slots][:, None] + np.arange(6)
+        geometry = scipy.sparse.csr_matrix((entries.ravel(), (np.repeat(rows, 6), columns.ravel())),
+                                           shape=(len(self.values), 6 * self.n_bodies))
+        geometry.eliminate_zeros()
+        return geometry
 
     def loads(self, magnitudes: np.ndarray, bodies_mask: np.ndarray | None = None) -> Loads:
         """Loads of the forces ``magnitudes`` (N) along the coordinates, on the bodies of
         ``bodies_mask`` only (all if None)."""
-        force = np.einsum("c,cbi->bi", magnitudes, self.unit_force)
-        torque = np.einsum("c,cbi->bi", magnitudes, self.unit_torque)
+        rows, slots = np.nonzero(self.bodies >= 0)
+        on = self.bodies[rows, slots]
+        force, torque = (np.stack([np.bincount(on, weights=magnitudes[rows] * unit[rows, slots, i],
+                                               minlength=self.n_bodies) for i in range(3)], axis=1)
+                         for unit in (self.unit_force, self.unit_torque))
         if bodies_mask is not None:
             force[~bodies_mask] = 0.0
             torque[~bodies_mask] = 0.0
@@ -128,15 +165,17 @@ class ImplicitCoordinates:
 
     def point_loads(self, magnitudes: np.ndarray) -> list:
         """(body, other (the body across the contact, or ``WALL``), point (m), force (N)) of the
-        forces ``magnitudes`` (N) along the coordinates that have points."""
+        forces ``magnitudes`` (N) along the coordinates that have points, in the order of the
+        coordinates and, within one, of the bodies."""
         out = []
         if self.points is None:
             return out
         for c in np.flatnonzero(np.asarray(magnitudes) != 0):
-            loaded = np.flatnonzero(np.all(np.isfinite(self.points[c]), axis=1))
-            for b in loaded:
-                other = next((o for o in loaded if o != b), WALL)
-                out.append((int(b), int(other), self.points[c, b], magnitudes[c] * self.unit_force[c, b]))
+            loaded = [k for k in np.argsort(self.bodies[c], kind="stable")
+                      if self.bodies[c, k] >= 0 and np.all(np.isfinite(self.points[c, k]))]
+            for k in loaded:
+                other = next((int(self.bodies[c, o]) for o in loaded if o != k), WALL)
+                out.append((int(self.bodies[c, k]), other, self.points[c, k], magnitudes[c] * self.unit_force[c, k]))
         return out
 
 

@@ -127,7 +127,6 @@ class BoundRepulsion(BoundInteraction):
         rep = self.interaction
         speed = np.abs(velocity).max() + np.abs(angular_velocity).max() * contacts.outer_radii.max()
         search = rep.reach + 2.0 * rep.cell_roughness + 2.0 * speed * dt
-        n = len(bodies)
         kept = []
         for gap in contacts.within(search):
             eps = rep.separation(gap.distance, gap.other == WALL)
@@ -136,16 +135,18 @@ class BoundRepulsion(BoundInteraction):
                 raise PlacementError(f"the roughness layers of body {body_label(bodies[gap.body].name, gap.body)}"
                                      f" and {other} touch"
                                      f" (gap {gap.distance:.4g} m)")
-            force, torque, points = np.zeros((n, 3)), np.zeros((n, 3)), np.full((n, 3), np.nan)
-            for body, point, sign in ((gap.body, gap.point, 1.0), (gap.other, gap.other_point, -1.0)):
+            pair = np.array([gap.body, gap.other])
+            force, torque, points = np.zeros((2, 3)), np.zeros((2, 3)), np.full((2, 3), np.nan)
+            for k, (body, point, sign) in enumerate(((gap.body, gap.point, 1.0), (gap.other, gap.other_point, -1.0))):
                 if body != WALL:
-                    force[body] = sign * gap.normal
-                    torque[body] = sign * np.cross(point - bodies[body].position, gap.normal)
-                    points[body] = point
-            rate = float(np.sum(force * velocity) + np.sum(torque * angular_velocity))
+                    force[k] = sign * gap.normal
+                    torque[k] = sign * np.cross(point - bodies[body].position, gap.normal)
+                    points[k] = point
+            on = pair[pair != WALL]
+            rate = float(np.sum(force[pair != WALL] * velocity[on]) + np.sum(torque[pair != WALL] * angular_velocity[on]))
             if eps + dt * min(rate, 0.0) < rep.reach:
-                kept.append((eps, force, torque, points))
+                kept.append((eps, pair, force, torque, points))
         if not kept:
             return None
-        eps, force, torque, points = map(np.array, zip(*kept))
-        return ImplicitCoordinates(eps, force, torque, points)
+        eps, pairs, force, torque, points = map(np.array, zip(*kept))
+        return ImplicitCoordinates(eps, pairs, force, torque, len(bodies), points)
