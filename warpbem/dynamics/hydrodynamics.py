@@ -115,8 +115,19 @@ class Responses:
         per step. Where every load is a single component (the "bodies" basis: a unit force or
         torque on one body), Q_kl is that component of motion l times the load: a gather, O(p^2),
         where the product of (p, 6 n) matrices costs O(p^2 n) (5 ms for the 384 loads of 64 cells,
-        and n^3 beyond); the product otherwise (np.einsum's own loop took ten times as long as it)."""
-        p = len(self.load_force)
+        and n^3 beyond); the product otherwise (np.einsum's own loop took ten times as long as it).
+        The free bodies' basis in its own order (load k on degree of freedom k) is gathered without
+        copying the loads and motions whole (37 ms of a step of 256 cells)."""
+        p, n = self.load_force.shape[:2]
+        if p == 6 * n:  # the bodies' basis in its own order, load k on degree of freedom k, checked without copies
+            body, axis = np.divmod(np.arange(p), 6)
+            magnitude = np.where(axis < 3, self.load_force[np.arange(p), body, axis % 3],
+                                 self.load_torque[np.arange(p), body, axis % 3])
+            if (np.all(magnitude != 0.0)
+                    and np.count_nonzero(self.load_force) + np.count_nonzero(self.load_torque) == p):
+                moved = np.where(axis < 3, self.velocity[:, body, axis % 3], self.angular_velocity[:, body, axis % 3])
+                q = magnitude[:, None] * moved.T
+                return 0.5 * (q + q.T)
         loads = np.concatenate([self.load_force.reshape(p, -1), self.load_torque.reshape(p, -1)], axis=1)
         motion = np.concatenate([self.velocity.reshape(p, -1), self.angular_velocity.reshape(p, -1)], axis=1)
         component = np.argmax(loads != 0.0, axis=1)

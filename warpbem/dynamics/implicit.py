@@ -190,12 +190,15 @@ class MobilityResponse(FactoredResponse):
         if p < STRUCTURED_FROM:
             return None
         stiff = sum((self.stiffness_gram(where, k) for where, k in stiffness), scipy.sparse.csr_matrix((p, p)))
-        a = self.scales[:, None] * stiff.toarray() * self.scales[None, :]
+        scale = scipy.sparse.diags(self.scales)
+        a = (scale @ stiff @ scale).tocsr()  # sparse over cells: a bond or contact couples one or two
         q = self.quadratic
         n = p // 6
         cells = np.arange(n)
-        own = np.eye(6) + dt * np.einsum("nij,njk->nik", a.reshape(n, 6, n, 6)[cells, :, cells],
-                                         q.reshape(n, 6, n, 6)[cells, :, cells])
+        rows, columns = np.broadcast_arrays(6 * cells[:, None, None] + np.arange(6)[:, None], 6 * cells[:, None, None]
+                                            + np.arange(6))
+        own_a = np.asarray(a[rows.ravel(), columns.ravel()]).reshape(n, 6, 6)  # each cell's own block of A
+        own = np.eye(6) + dt * np.einsum("nij,njk->nik", own_a, q.reshape(n, 6, n, 6)[cells, :, cells])
         alone = np.linalg.inv(own)  # each cell's own system (6 x 6), inverted once per Newton step
 
         def each_cell(r):
