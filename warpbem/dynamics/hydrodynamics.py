@@ -125,7 +125,8 @@ class Responses:
                                  self.load_torque[np.arange(p), body, axis % 3])
             if (np.all(magnitude != 0.0)
                     and np.count_nonzero(self.load_force) + np.count_nonzero(self.load_torque) == p):
-                moved = np.where(axis < 3, self.velocity[:, body, axis % 3], self.angular_velocity[:, body, axis % 3])
+                # motion l of degree of freedom k, in the basis's order (the bodies', 6 each)
+                moved = np.concatenate([self.velocity, self.angular_velocity], axis=2).reshape(p, p)
                 q = magnitude[:, None] * moved.T
                 return 0.5 * (q + q.T)
         loads = np.concatenate([self.load_force.reshape(p, -1), self.load_torque.reshape(p, -1)], axis=1)

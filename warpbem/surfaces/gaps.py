@@ -50,6 +50,12 @@ def candidate_pairs(positions, outer_radii, fixed, wall: bool, within: float) ->
     """(i, j) with body i free and j another body or WALL whose bounding spheres (``outer_radii``
     about ``positions``) come closer than ``within`` (m): the only pairs whose surface gap can be
     below ``within``. Each pair of free bodies appears once; fixed bodies are never ``i``."""
+    first, second = candidate_arrays(positions, outer_radii, fixed, wall, within)
+    return list(zip(first.tolist(), second.tolist()))
+
+
+def candidate_arrays(positions, outer_radii, fixed, wall: bool, within: float) -> tuple[np.ndarray, np.ndarray]:
+    """``candidate_pairs`` as two arrays, the i and the j of each pair in the same order."""
     positions, outer_radii = np.asarray(positions, dtype=float), np.asarray(outer_radii, dtype=float)
     fixed = np.asarray(fixed, dtype=bool)
     free = np.flatnonzero(~fixed)
@@ -67,7 +73,7 @@ def candidate_pairs(positions, outer_radii, fixed, wall: bool, within: float) ->
         second = np.concatenate([np.full(len(to_wall), WALL), second])
     # each free body's wall pair first, then the other bodies in order
     order = np.lexsort((second, first))
-    return list(zip(first[order].tolist(), second[order].tolist()))
+    return first[order], second[order]
 
 
 class GapFinder:
@@ -198,12 +204,14 @@ class Contacts:
         gap, a lower bound of the exact one, until that bound passes the best gap found."""
         if among not in ("all", "bodies", "wall"):
             raise ValueError(f"closest: among = {among!r}, not 'all', 'bodies' or 'wall'")
-        pairs = [p for p in self.pairs(np.inf) if among == "all" or (p[1] == WALL) == (among == "wall")]
+        # as arrays: a list of the 32 640 pairs of 256 cells took 33 ms a step
+        first, second = candidate_arrays(self.positions, self.outer_radii, self.fixed, self.wall, np.inf)
+        if among != "all":
+            first, second = first[(second == WALL) == (among == "wall")], second[(second == WALL) == (among == "wall")]
         if among == "wall":  # every free body's, in one launch (GapFinder.to_wall)
-            return float(min((g.distance for g in self.to_wall([i for i, _ in pairs])), default=np.inf))
+            return float(min((g.distance for g in self.to_wall(first.tolist())), default=np.inf))
         # the bounding-sphere gaps at once (a list over the 2016 pairs of 64 cells took 7 ms a frame);
         # the exact gaps' minimum does not depend on the order they are searched in
-        first, second = np.array(pairs, dtype=int).reshape(-1, 2).T
         positions, radii = np.asarray(self.positions, dtype=float), np.asarray(self.outer_radii, dtype=float)
         other = np.where(second == WALL, first, second)
         bounds = np.where(second == WALL, positions[first, 2] - radii[first],
@@ -212,5 +220,5 @@ class Contacts:
         for k in np.argsort(bounds, kind="stable"):
             if bounds[k] >= best:
                 break
-            best = min(best, self.gap(*pairs[k]).distance)
+            best = min(best, self.gap(int(first[k]), int(second[k])).distance)
         return float(best)
