@@ -107,7 +107,7 @@ class FactoredResponse(DenseResponse):
 
     @classmethod
     def of(cls, coordinates, velocity, angular_velocity) -> "FactoredResponse":
-        """From the coordinates' unit loads (m, n, 3) and the basis's motions (p, n, 3)."""
+        """From the coordinates (ImplicitCoordinates) and the basis's motions (p, n, 3)."""
         n = coordinates.n_bodies
         motion = np.concatenate([velocity, angular_velocity], axis=2).reshape(-1, 6 * n).T
         return cls(coordinates.rate_geometry(), motion)
@@ -170,7 +170,7 @@ class MobilityResponse(FactoredResponse):
 
     @classmethod
     def of(cls, coordinates, quadratic, load_force, load_torque) -> "MobilityResponse":
-        """From the coordinates' unit loads (m, n, 3) over n free bodies, the symmetrised grand
+        """From the coordinates (ImplicitCoordinates) of n free bodies, the symmetrised grand
         mobility ``quadratic`` (6 n, 6 n) and the basis's loads (6 n, n, 3 each), which must be
         one component each, load k on the k-th of the bodies' 6 n degrees of freedom (force x,
         y, z, torque x, y, z of each body in turn): D is one over each load's magnitude."""

@@ -43,8 +43,8 @@ of two ways:
   with r the rates of the coordinates without the stiff laws and B the response of the rates to
   unit forces (symmetric by reciprocity). By virtual work the rate of a coordinate under rigid
   motions (U_b, Omega_b) is sum_b unit_force_cb . U_b + unit_torque_cb . Omega_b (over the one or
-  two bodies b the coordinate acts on), so the same
-  unit loads give both. The frame records the law at the state itself, f(s_c).
+  two bodies b the coordinate acts on), so the same unit loads give both. The frame records the
+  law at the state itself, f(s_c).
 
 An interaction that carries state of its own (a bond table, a counter) declares it in
 ``state_columns`` ({name: (unit, per-frame shape)}), gives its start in ``initial_state`` and
@@ -156,8 +156,8 @@ class ImplicitCoordinates:
         rows, slots = np.nonzero(self.bodies >= 0)
         on = self.bodies[rows, slots]
         force, torque = (np.stack([np.bincount(on, weights=magnitudes[rows] * unit[rows, slots, i],
-                                               minlength=self.n_bodies) for i in range(3)], axis=1)
-                         for unit in (self.unit_force, self.unit_torque))
+                                               minlength=self.n_bodies) for i in range(3)], axis=1).astype(float)
+                         for unit in (self.unit_force, self.unit_torque))  # (integers where there is none)
         if bodies_mask is not None:
             force[~bodies_mask] = 0.0
             torque[~bodies_mask] = 0.0

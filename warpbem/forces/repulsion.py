@@ -142,8 +142,9 @@ class BoundRepulsion(BoundInteraction):
                     force[k] = sign * gap.normal
                     torque[k] = sign * np.cross(point - bodies[body].position, gap.normal)
                     points[k] = point
-            on = pair[pair != WALL]
-            rate = float(np.sum(force[pair != WALL] * velocity[on]) + np.sum(torque[pair != WALL] * angular_velocity[on]))
+            present = pair != WALL
+            rate = float(np.sum(force[present] * velocity[pair[present]])
+                         + np.sum(torque[present] * angular_velocity[pair[present]]))
             if eps + dt * min(rate, 0.0) < rep.reach:
                 kept.append((eps, pair, force, torque, points))
         if not kept:
