@@ -338,6 +338,24 @@ def test_ligand_density_goes_with_ligand_sites_only():
         BondOptions(spring_constant=1e-3, ligand_geometry="sites")
 
 
+def test_a_step_does_not_depend_on_the_steps_before_it():
+    """The bond kinetics keep their work arrays on the device between steps (forces/adhesion.py):
+    a step from a state gives the same table from an interaction that has just stepped elsewhere,
+    with every receptor within reach bound there (k_f0 dt = 10), as from one freshly bound; a
+    receptor marked bound in the step before would not form again."""
+    body = Body(MESH, position=(0, 0, A + 0.2e-6))
+    contacts = Contacts([body], [MESH.size()], True, GapFinder())
+    used, fresh = (adhesion(spring_constant=1e-9, on_rate=1e4, max_bonds=200) for _ in range(2))
+    busy = used.advance_state(used.initial_state([body]), [body], [body], contacts, 1e-3, 1e-3)
+    assert busy["count"][0] > 20  # the step before bound many receptors
+    start = dict(used.initial_state([body]), draws=np.array(3.0))
+    after, alone = (x.advance_state(start, [body], [body], contacts, 1e-3, 1e-3) for x in (used, fresh))
+    bound_in = [set(part["receptor"][part["receptor"] >= 0]) for part in (busy, after)]
+    assert bound_in[0] & bound_in[1]  # the same receptors form again
+    for name, value in alone.items():
+        np.testing.assert_array_equal(after[name], value)
+
+
 def test_cap_on_bonds_per_cell():
     """With max_bonds = 5 (thesis figs. 4.12-4.14 use 40) no cell ever holds more."""
     adh = adhesion(spring_constant=1e-9, on_rate=1e4, max_bonds=5)
