@@ -207,7 +207,8 @@ class Contacts:
         # as arrays: a list of the 32 640 pairs of 256 cells took 33 ms a step
         first, second = candidate_arrays(self.positions, self.outer_radii, self.fixed, self.wall, np.inf)
         if among != "all":
-            first, second = first[(second == WALL) == (among == "wall")], second[(second == WALL) == (among == "wall")]
+            kept = (second == WALL) == (among == "wall")
+            first, second = first[kept], second[kept]
         if among == "wall":  # every free body's, in one launch (GapFinder.to_wall)
             return float(min((g.distance for g in self.to_wall(first.tolist())), default=np.inf))
         # the bounding-sphere gaps at once (a list over the 2016 pairs of 64 cells took 7 ms a frame);
