@@ -65,6 +65,12 @@ STENCIL = np.concatenate([
 ])
 STENCIL_POINTS = len(STENCIL)
 SOURCES = 7  # unit force x, y, z, unit torque x, y, z (N m), the ambient flow
+# a far pair's row: the flow's velocity and angular velocity of each cell (2, 3) each, then the
+# velocity and angular velocity of the other cell under each cell's 6 basis loads (2, 6, 3) each
+# (the loads on the first moving the second, then the reverse); what a pair snapshot's row
+# (pairwise.part_row) holds besides these, each cell's own motion under its own loads, is zero
+COUPLING_SHAPES = ((2, 3), (2, 3), (2, 6, 3), (2, 6, 3))
+COUPLING_SIZE = sum(int(np.prod(s)) for s in COUPLING_SHAPES)
 LEVI_CIVITA = np.zeros((3, 3, 3))
 for _i, _j, _k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
     LEVI_CIVITA[_i, _j, _k], LEVI_CIVITA[_i, _k, _j] = 1.0, -1.0
@@ -132,15 +138,16 @@ class CellTractions:
 
 class FarField:
     """The far pairs' part of the grand mobility and of the flow's motion (module docstring) for
-    the model of ``hydro`` (a ``HydrodynamicSolves``), as rows of ``pairwise.part_row``'s layout
-    (``row_size`` long) whose cells' own blocks are zero: what the pair adds to the cells alone."""
+    the model of ``hydro`` (a ``HydrodynamicSolves``), as rows of COUPLING_SHAPES: what the pair
+    adds to the cells alone, which is all coupling (its cells' own blocks are zero, so they are
+    not kept)."""
 
-    def __init__(self, hydro, row_size: int):
+    def __init__(self, hydro):
         from .. import runtime
         from ..kernels import far_field as kernels
 
         model = hydro.model
-        self.model, self.lone_of, self.row_size = model, hydro.lone_of, row_size
+        self.model, self.lone_of = model, hydro.lone_of
         self.height_lattice = hydro.interaction  # the pair snapshots' heights
         self.device = runtime.resolve_device(hydro.mobility.device)
         self.options = model.solver.without_accuracy()
@@ -156,9 +163,9 @@ class FarField:
         self._last = None
 
     def rows(self, bodies, first, second, offsets) -> np.ndarray:
-        """(P, row) the far pairs (first[p], second[p]) at lateral ``offsets`` (m, of the second
-        cell from the first): the coupling of each cell's loads onto the other's motion and of
-        each one's traction in the flow onto the other's motion; their own blocks zero. Each
+        """(P, COUPLING_SIZE) the far pairs (first[p], second[p]) at lateral ``offsets`` (m, of the
+        second cell from the first), rows of COUPLING_SHAPES: the coupling of each one's traction
+        in the flow onto each cell's motion and of each cell's loads onto the other's motion. Each
         cell's tractions are interpolated linearly between the two lattice heights around its
         own (the coupling is linear in either cell's), so a pair is the bilinear blend of its
         four height combinations, each kept until its key changes."""
@@ -174,7 +181,7 @@ class FarField:
         pairs = np.stack([first, second])
         last = self._last
         if last is None or not np.array_equal(last[0], pairs):
-            last = self._last = (pairs, np.full_like(keys, -1), np.zeros((n_pairs, 4, self.row_size)))
+            last = self._last = (pairs, np.full_like(keys, -1), np.zeros((n_pairs, 4, COUPLING_SIZE)))
         _, kept_keys, rows = last
         stale = np.any(keys != kept_keys, axis=2) & (weights > 0.0)
         if np.any(stale):
@@ -238,8 +245,8 @@ class FarField:
         flow_v, flow_w = np.zeros((n, 2, 3)), np.zeros((n, 2, 3))
         flow_v[:, 0], flow_w[:, 0] = reverse[:, :3], reverse[:, 3:]
         flow_v[:, 1], flow_w[:, 1] = coupling[:, :3, 6], coupling[:, 3:, 6]
-        # (pair, loaded cell, load component, responding cell, 3): zero on each cell's own motion
-        grand_v, grand_w = np.zeros((n, 2, 6, 2, 3)), np.zeros((n, 2, 6, 2, 3))
-        grand_v[:, 0, :, 1], grand_w[:, 0, :, 1] = np.swapaxes(on_second[:, :3], 1, 2), np.swapaxes(on_second[:, 3:], 1, 2)
-        grand_v[:, 1, :, 0], grand_w[:, 1, :, 0] = np.swapaxes(on_first[:, :3], 1, 2), np.swapaxes(on_first[:, 3:], 1, 2)
+        # (pair, loaded cell, load component, 3): the motion of the other cell
+        grand_v, grand_w = np.zeros((n, 2, 6, 3)), np.zeros((n, 2, 6, 3))
+        grand_v[:, 0], grand_w[:, 0] = np.swapaxes(on_second[:, :3], 1, 2), np.swapaxes(on_second[:, 3:], 1, 2)
+        grand_v[:, 1], grand_w[:, 1] = np.swapaxes(on_first[:, :3], 1, 2), np.swapaxes(on_first[:, 3:], 1, 2)
         return np.concatenate([a.reshape(n, -1) for a in (flow_v, flow_w, grand_v, grand_w)], axis=1)

@@ -59,7 +59,7 @@ import numpy as np
 from ..hydro.options import NEAR_RADII
 from ..surfaces.body import Body
 from .close_pairs import ClosePairs, with_films
-from .far_field import FarField
+from .far_field import COUPLING_SHAPES, FarField
 from .many_body import ManyBodyRemainder
 
 # y -> -y: a (basis) load's force keeps x, z and its torque (a pseudovector) keeps y; the
@@ -79,6 +79,7 @@ LATTICE_POWER = 2.5
 # velocity, angular velocity (12, 2, 3)): the lattice points' rows are interpolated at once
 PART_SHAPES = ((2, 3), (2, 3), (12, 2, 3), (12, 2, 3))
 PART_SIZES = tuple(int(np.prod(s)) for s in PART_SHAPES)
+FAR_SIZES = tuple(int(np.prod(s)) for s in COUPLING_SHAPES)
 # an offset this close to a lattice line, in lattice spacings, lies on it (lattice_corners)
 ROUND_OFF = 1e-9
 # the corners of a lattice square from its lower left one, in lattice spacings
@@ -176,7 +177,7 @@ class PairwiseMobility:
         # which of its points' rows were looked up (P, 4), those rows (P, 4, row))
         self._squares = None
         self.remainder = ManyBodyRemainder(hydro) if model.solver.many_body == "coarse" else None
-        self.far = FarField(hydro, sum(PART_SIZES)) if model.solver.far_field == "moments" else None
+        self.far = FarField(hydro) if model.solver.far_field == "moments" else None
         self.near_radius = model.solver.near_radius
         self.close = ClosePairs(hydro) if model.solver.close_pairs == "lubrication" else None
 
@@ -206,7 +207,8 @@ class PairwiseMobility:
     def _pairs_part(self, bodies):
         """sum over the pairs within the cut-off of [pair snapshot, interpolated at the pair's
         offset - each cell's lone snapshot at the pair's heights]: the flow's (n, 3) velocity and
-        angular velocity corrections and the basis's (6n, n, 3) ones."""
+        angular velocity corrections and the basis's (6n, n, 3) ones. A far pair's rows hold its
+        coupling alone (far_field.py), so only the near pairs add to the cells' own blocks."""
         n = len(bodies)
         positions = np.array([body.position for body in bodies])
         first, second = np.triu_indices(n, 1)
@@ -216,39 +218,51 @@ class PairwiseMobility:
         first, second, offsets, distance = first[within], second[within], offsets[within], distance[within]
         near = self._near(first, second, distance)
         close = near & self.close.takes(first, second, positions) if self.close is not None else np.zeros_like(near)
-        rows = np.zeros((len(first), sum(PART_SIZES)))
-        lattice = near & ~close
+        rows = np.zeros((np.count_nonzero(near), sum(PART_SIZES)))  # of the near pairs
+        lattice, close = ~close[near], close[near]
+        near_first, near_second = first[near], second[near]
         if np.any(lattice):
-            rows[lattice] = self._pair_rows(bodies, first[lattice], second[lattice], offsets[lattice])
+            rows[lattice] = self._pair_rows(bodies, near_first[lattice], near_second[lattice], offsets[near][lattice])
         films = []
         if np.any(close):  # near contact: the two-sphere resistance plus the wall's part (close_pairs.py)
-            rows[close], films = self._close_rows(bodies, first[close], second[close])
-        if not np.all(near):  # the far pairs add their coupling to the cells alone (far_field.py)
-            rows[~near] = self.far.rows(bodies, first[~near], second[~near], offsets[~near])
+            rows[close], films = self._close_rows(bodies, near_first[close], near_second[close])
         flow_v, flow_w, grand_v, grand_w = (part.reshape((-1,) + shape) for part, shape in
                                             zip(np.split(rows, np.cumsum(PART_SIZES)[:-1], axis=1), PART_SHAPES))
-        count = len(first)
+        # (near pair, loaded cell, load component, responding cell, 3)
+        grand_v, grand_w = (g.reshape(len(rows), 2, 6, 2, 3) for g in (grand_v, grand_w))
+        # of every pair: (pair, loaded cell, load component, 3) the other cell's motion
+        coupling_v, coupling_w = np.empty((len(first), 2, 6, 3)), np.empty((len(first), 2, 6, 3))
+        for coupling, grand in ((coupling_v, grand_v), (coupling_w, grand_w)):
+            coupling[near, 0], coupling[near, 1] = grand[:, 0, :, 1], grand[:, 1, :, 0]
+        if not np.all(near):  # the far pairs add their coupling to the cells alone (far_field.py)
+            far_rows = self.far.rows(bodies, first[~near], second[~near], offsets[~near])
+            far_flow_v, far_flow_w, far_v, far_w = (part.reshape((-1,) + shape) for part, shape in zip(
+                np.split(far_rows, np.cumsum(FAR_SIZES)[:-1], axis=1), COUPLING_SHAPES))
+            coupling_v[~near], coupling_w[~near] = far_v, far_w
+            near_flow_v, near_flow_w = flow_v, flow_w
+            flow_v, flow_w = np.empty((len(first), 2, 3)), np.empty((len(first), 2, 3))
+            flow_v[near], flow_w[near] = near_flow_v, near_flow_w
+            flow_v[~near], flow_w[~near] = far_flow_v, far_flow_w
         velocity = summed(first, flow_v[:, 0], n) + summed(second, flow_v[:, 1], n)
         angular = summed(first, flow_w[:, 0], n) + summed(second, flow_w[:, 1], n)
-        # (loaded cell, responding cell, load component, 3); a pair's loads on one cell and the
+        # (loaded cell, load component, responding cell, 3): a pair's loads on one cell and the
         # motion of the other land on its own entry, those on a cell and its own motion on the
-        # cell's diagonal entry, summed over its pairs
-        by_cells_v, by_cells_w = np.zeros((n, n, 6, 3)), np.zeros((n, n, 6, 3))
-        for by_cells, grand in ((by_cells_v, grand_v), (by_cells_w, grand_w)):
-            g = grand.reshape(count, 2, 6, 2, 3)  # (pair, loaded cell, load component, responding cell, 3)
-            by_cells[first, second], by_cells[second, first] = g[:, 0, :, 1], g[:, 1, :, 0]
-            by_cells[np.arange(n), np.arange(n)] = summed(first, g[:, 0, :, 0], n) + summed(second, g[:, 1, :, 1], n)
-        # each cell's lone snapshot at its pair height, once per near pair it is in (a far pair's rows
-        # hold the coupling alone)
-        pairs_of = np.bincount(np.concatenate([first[near], second[near]]), minlength=n)
+        # cell's diagonal entry, summed over its near pairs
+        cells = np.arange(n)
+        basis_velocity, basis_angular = np.zeros((n, 6, n, 3)), np.zeros((n, 6, n, 3))
+        for basis, coupling, grand in ((basis_velocity, coupling_v, grand_v), (basis_angular, coupling_w, grand_w)):
+            basis[first, :, second], basis[second, :, first] = coupling[:, 0], coupling[:, 1]
+            basis[cells, :, cells] = summed(near_first, grand[:, 0, :, 0], n) + summed(near_second, grand[:, 1, :, 1], n)
+        # each cell's lone snapshot at its pair height, once per near pair it is in
+        pairs_of = np.bincount(np.concatenate([near_first, near_second]), minlength=n)
         lone = self._lone_snapshots(bodies, self.hydro.interaction, np.flatnonzero(pairs_of))
         for b, (lone_flow, lone_grand) in lone.items():
             velocity[b] -= pairs_of[b] * lone_flow.velocity[0]
             angular[b] -= pairs_of[b] * lone_flow.angular_velocity[0]
-            by_cells_v[b, b] -= pairs_of[b] * lone_grand.velocity[:, 0]
-            by_cells_w[b, b] -= pairs_of[b] * lone_grand.angular_velocity[:, 0]
-        basis_velocity, basis_angular = (a.transpose(0, 2, 1, 3).reshape(6 * n, n, 3) for a in (by_cells_v, by_cells_w))
-        return velocity, angular, basis_velocity, basis_angular, films
+            basis_velocity[b, :, b] -= pairs_of[b] * lone_grand.velocity[:, 0]
+            basis_angular[b, :, b] -= pairs_of[b] * lone_grand.angular_velocity[:, 0]
+        return (velocity, angular, basis_velocity.reshape(6 * n, n, 3), basis_angular.reshape(6 * n, n, 3),
+                films)
 
     def _lone_snapshots(self, bodies, spacing: float, cells=None):
         """{cell: its lone snapshot} of ``cells`` (default all) at their heights snapped to
