@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from warpbem.dynamics.implicit import (STRUCTURED_FROM, DenseResponse, FactoredResponse, ImplicitSystem,
-                                       MobilityResponse)
+                                       MobilityResponse, symmetric_product)
 from warpbem.forces.bond_model import BondLaws
 from warpbem.forces.interaction import ImplicitCoordinates
 
@@ -140,3 +140,15 @@ def test_the_newton_step_without_its_matrix_is_the_formed_one():
     np.testing.assert_allclose(z0, z1, rtol=0, atol=1e-8 * np.abs(z1).max())
     np.testing.assert_allclose(f0, f1, rtol=0, atol=1e-8 * np.abs(f1).max())
     assert np.abs(f1).max() > 1e-12
+
+
+def test_the_symmetric_product_is_the_matrix_product():
+    """symmetric_product (BLAS symv from STRUCTURED_FROM coefficients on, reading one triangle)
+    gives Q x to round-off for a symmetric Q, below and above that size; a wrong triangle or
+    storage order would give another matrix's product."""
+    rng = np.random.default_rng(3)
+    for p in (STRUCTURED_FROM - 1, STRUCTURED_FROM, 3 * STRUCTURED_FROM + 5):
+        a = rng.normal(size=(p, p))
+        q = 0.5 * (a + a.T)
+        x = rng.normal(size=p)
+        np.testing.assert_allclose(symmetric_product(q, x), q @ x, rtol=0, atol=1e-12 * np.abs(q @ x).max())
