@@ -305,7 +305,8 @@ class ImplicitSystem:
             # norm 3.1e-39 repeated for 190 iterations)
             size = step @ symmetric_product(self.quadratic, step)
             if (np.all(moves <= LENGTH_TOLERANCE + 1e-13 * np.abs(self.end_values(z, dt)))
-                    and (size <= 1e-24 * max(z @ symmetric_product(self.quadratic, z), 1e-300) or size >= STALLED * previous)):
+                    and (size <= 1e-24 * max(z @ symmetric_product(self.quadratic, z), 1e-300)
+                         or size >= STALLED * previous)):
                 z = z + step
                 return z, self.evaluate(self.end_values(z, dt))[1]
             slope = gradient @ step

@@ -252,7 +252,8 @@ class PairwiseMobility:
         basis_velocity, basis_angular = np.zeros((n, 6, n, 3)), np.zeros((n, 6, n, 3))
         for basis, coupling, grand in ((basis_velocity, coupling_v, grand_v), (basis_angular, coupling_w, grand_w)):
             basis[first, :, second], basis[second, :, first] = coupling[:, 0], coupling[:, 1]
-            basis[cells, :, cells] = summed(near_first, grand[:, 0, :, 0], n) + summed(near_second, grand[:, 1, :, 1], n)
+            basis[cells, :, cells] = (summed(near_first, grand[:, 0, :, 0], n)
+                                      + summed(near_second, grand[:, 1, :, 1], n))
         # each cell's lone snapshot at its pair height, once per near pair it is in
         pairs_of = np.bincount(np.concatenate([near_first, near_second]), minlength=n)
         lone = self._lone_snapshots(bodies, self.hydro.interaction, np.flatnonzero(pairs_of))

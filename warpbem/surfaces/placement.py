@@ -106,7 +106,8 @@ def check_placement(bodies, wall: bool) -> None:
     for i, j in sorted(map(tuple, candidates)):
         if np.linalg.norm(centres[i] - centres[j]) <= radii[i] + radii[j]:
             nodes_i, nodes_j = (b.world_nodes()[b.mesh.elements] for b in (bodies[i], bodies[j]))
-            samples_i, samples_j = (b.mesh.surface_samples() @ b.rotation().T + b.position for b in (bodies[i], bodies[j]))
+            samples_i, samples_j = (b.mesh.surface_samples() @ b.rotation().T + b.position
+                                    for b in (bodies[i], bodies[j]))
             depth = min(signed_distance(samples_j, nodes_i).min(), signed_distance(samples_i, nodes_j).min())
             if depth <= 0.0:
                 raise PlacementError(
