@@ -152,3 +152,43 @@ def test_the_symmetric_product_is_the_matrix_product():
         q = 0.5 * (a + a.T)
         x = rng.normal(size=p)
         np.testing.assert_allclose(symmetric_product(q, x), q @ x, rtol=0, atol=1e-12 * np.abs(q @ x).max())
+
+
+def test_the_stiffness_matrix_by_blocks_is_the_sparse_product():
+    """A = D G^T K G D of the Newton step (MobilityResponse._stiffness: one product per block of
+    coordinates, summed by its pattern) against scipy's sparse products of G's rows: bonds (3 x 3
+    stiffness) on one cell each, and contacts (a stiffness per coordinate) between two cells or a
+    cell and the wall, on 24 cells (seeded); and each cell's own 6 x 6 block of it. A second call
+    with other stiffnesses reuses the pattern and still matches; a 3 x 3 block whose coordinates
+    act on different bodies is refused (None: the caller forms H)."""
+    rng = np.random.default_rng(11)
+    cells, bonds, contacts = 24, 40, 30
+    p = 6 * cells
+    owner = rng.integers(cells, size=bonds)
+    pairs = np.stack([rng.integers(cells, size=contacts), rng.integers(-1, cells, size=contacts)], axis=1)
+    pairs[pairs[:, 0] == pairs[:, 1], 1] = -1  # a contact with the wall
+    bodies = np.concatenate([np.stack([np.repeat(owner, 3), np.full(3 * bonds, -1)], axis=1), pairs])
+    m = len(bodies)
+    unit_force, unit_torque = rng.normal(size=(m, 2, 3)), rng.normal(size=(m, 2, 3)) * 5e-6
+    unit_force[bodies < 0], unit_torque[bodies < 0] = 0.0, 0.0
+    coordinates = ImplicitCoordinates(rng.normal(size=m) * 1e-8, bodies, unit_force, unit_torque, cells)
+    load_force, load_torque = np.zeros((p, cells, 3)), np.zeros((p, cells, 3))
+    for b in range(cells):
+        for i in range(3):
+            load_force[6 * b + i, b, i], load_torque[6 * b + 3 + i, b, i] = 1.0, 5e-6
+    a = rng.normal(size=(p, p))
+    response = MobilityResponse.of(coordinates, a @ a.T, load_force, load_torque)
+    scale = np.diag(response.scales)
+    for _ in range(2):
+        blocks = rng.normal(size=(bonds, 3, 3))
+        stiffness = [(slice(0, 3 * bonds), blocks @ blocks.transpose(0, 2, 1)),
+                     (slice(3 * bonds, m), rng.uniform(size=contacts))]
+        expected = scale @ sum(response.stiffness_gram(where, k) for where, k in stiffness).toarray() @ scale
+        matrix, own = response._stiffness(stiffness)
+        np.testing.assert_allclose(matrix.toarray(), expected, rtol=0, atol=1e-12 * np.abs(expected).max())
+        own_expected = np.array([expected[6 * c:6 * c + 6, 6 * c:6 * c + 6] for c in range(cells)])
+        np.testing.assert_allclose(own, own_expected, rtol=0, atol=1e-12 * np.abs(expected).max())
+    bodies[1, 0] = (bodies[1, 0] + 1) % cells  # a bond's second component on another cell
+    split = MobilityResponse.of(ImplicitCoordinates(coordinates.values, bodies, unit_force, unit_torque, cells),
+                                a @ a.T, load_force, load_torque)
+    assert split._stiffness(stiffness) is None
