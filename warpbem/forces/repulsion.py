@@ -127,27 +127,31 @@ class BoundRepulsion(BoundInteraction):
         rep = self.interaction
         speed = np.abs(velocity).max() + np.abs(angular_velocity).max() * contacts.outer_radii.max()
         search = rep.reach + 2.0 * rep.cell_roughness + 2.0 * speed * dt
-        kept = []
-        for gap in contacts.within(search):
-            eps = rep.separation(gap.distance, gap.other == WALL)
-            if eps <= 0.0:
-                other = "the wall" if gap.other == WALL else f"body {body_label(bodies[gap.other].name, gap.other)}"
-                raise PlacementError(f"the roughness layers of body {body_label(bodies[gap.body].name, gap.body)}"
-                                     f" and {other} touch"
-                                     f" (gap {gap.distance:.4g} m)")
-            pair = np.array([gap.body, gap.other])
-            force, torque, points = np.zeros((2, 3)), np.zeros((2, 3)), np.full((2, 3), np.nan)
-            for k, (body, point, sign) in enumerate(((gap.body, gap.point, 1.0), (gap.other, gap.other_point, -1.0))):
-                if body != WALL:
-                    force[k] = sign * gap.normal
-                    torque[k] = sign * np.cross(point - bodies[body].position, gap.normal)
-                    points[k] = point
-            present = pair != WALL
-            rate = float(np.sum(force[present] * velocity[pair[present]])
-                         + np.sum(torque[present] * angular_velocity[pair[present]]))
-            if eps + dt * min(rate, 0.0) < rep.reach:
-                kept.append((eps, pair, force, torque, points))
-        if not kept:
+        gaps = contacts.within(search)
+        if not gaps:
             return None
-        eps, pairs, force, torque, points = map(np.array, zip(*kept))
+        pairs = np.array([(gap.body, gap.other) for gap in gaps])
+        eps = (np.array([gap.distance for gap in gaps]) - rep.cell_roughness
+               - np.where(pairs[:, 1] == WALL, rep.wall_roughness, rep.cell_roughness))  # separation()
+        if np.any(eps <= 0.0):
+            gap = gaps[int(np.flatnonzero(eps <= 0.0)[0])]
+            other = "the wall" if gap.other == WALL else f"body {body_label(bodies[gap.other].name, gap.other)}"
+            raise PlacementError(f"the roughness layers of body {body_label(bodies[gap.body].name, gap.body)}"
+                                 f" and {other} touch"
+                                 f" (gap {gap.distance:.4g} m)")
+        # the unit force along each contact's normal on its body, minus it on the other (none on the wall)
+        present = (pairs != WALL)[:, :, None]
+        on = np.maximum(pairs, 0)
+        points = np.stack([[gap.point for gap in gaps], [gap.other_point for gap in gaps]], axis=1)
+        normal = np.array([gap.normal for gap in gaps])[:, None, :] * np.array([1.0, -1.0])[:, None]
+        positions = np.array([body.position for body in bodies])
+        force = np.where(present, normal, 0.0)
+        torque = np.where(present, np.cross(points - positions[on], normal), 0.0)
+        points = np.where(present, points, np.nan)
+        rate = (np.einsum("cki,cki->c", force, np.where(present, velocity[on], 0.0))
+                + np.einsum("cki,cki->c", torque, np.where(present, angular_velocity[on], 0.0)))
+        kept = eps + dt * np.minimum(rate, 0.0) < rep.reach
+        if not np.any(kept):
+            return None
+        eps, pairs, force, torque, points = (x[kept] for x in (eps, pairs, force, torque, points))
         return ImplicitCoordinates(eps, pairs, force, torque, len(bodies), points)
