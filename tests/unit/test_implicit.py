@@ -160,7 +160,8 @@ def test_the_stiffness_matrix_by_blocks_is_the_sparse_product():
     stiffness) on one cell each, and contacts (a stiffness per coordinate) between two cells or a
     cell and the wall, on 24 cells (seeded); and each cell's own 6 x 6 block of it. A second call
     with other stiffnesses reuses the pattern and still matches; a 3 x 3 block whose coordinates
-    act on different bodies is refused (None: the caller forms H)."""
+    act on different bodies, or a coordinate on its second body alone, is refused (None: the caller
+    forms H)."""
     rng = np.random.default_rng(11)
     cells, bonds, contacts = 24, 40, 30
     p = 6 * cells
@@ -192,3 +193,8 @@ def test_the_stiffness_matrix_by_blocks_is_the_sparse_product():
     split = MobilityResponse.of(ImplicitCoordinates(coordinates.values, bodies, unit_force, unit_torque, cells),
                                 a @ a.T, load_force, load_torque)
     assert split._stiffness(stiffness) is None
+    bodies[3 * bonds] = (-1, max(bodies[3 * bonds, 1], 0))  # a contact held on its second body alone
+    bodies[1, 0] = bodies[0, 0]
+    second_only = MobilityResponse.of(ImplicitCoordinates(coordinates.values, bodies, unit_force, unit_torque, cells),
+                                      a @ a.T, load_force, load_torque)
+    assert second_only._stiffness(stiffness) is None

@@ -245,7 +245,8 @@ class MobilityResponse(FactoredResponse):
         one bincount over the pattern, which is the same at every Newton step of a time step and
         found once (64 cells with 1000 bonds: 0.21 ms a Newton step, where scipy's sparse products
         of G took 1.47; 256 cells with 4000 bonds: 0.69 against 3.0). None where a 3 x 3 block's
-        coordinates act on different bodies (the caller then forms H)."""
+        coordinates act on different bodies, or a coordinate on its second body alone (the caller
+        then forms H)."""
         signature = tuple((where, k.shape) for where, k in stiffness)
         if self._pattern is None or self._pattern[0] != signature:
             self._pattern = (signature, self._stiffness_pattern(stiffness))
@@ -274,7 +275,7 @@ class MobilityResponse(FactoredResponse):
         for law, (where, k) in enumerate(stiffness):
             index = np.arange(len(self.bodies))[where].reshape(-1, 1 if k.ndim == 1 else 3)
             bodies = self.bodies[index]  # (blocks, coordinates of a block, 2)
-            if np.any(bodies != bodies[:, :1]):
+            if np.any(bodies != bodies[:, :1]) or np.any(bodies[:, 0, 0] < 0):
                 return None
             two = bodies[:, 0, 1] >= 0
             for blocks, width in ((np.flatnonzero(~two), 6), (np.flatnonzero(two), 12)):
@@ -288,6 +289,7 @@ class MobilityResponse(FactoredResponse):
         position = np.minimum(np.searchsorted(unique, own_keys), max(len(unique) - 1, 0))
         own = np.where(unique[position] == own_keys, position, -1) if len(unique) else np.full(len(own_keys), -1)
         return groups, inverse.ravel(), unique % p, indptr, own
+
 
 @dataclass(frozen=True)
 class ImplicitSystem:
