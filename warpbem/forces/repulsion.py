@@ -74,9 +74,12 @@ class Repulsion(Interaction):
     def __post_init__(self):
         validate(self)
 
-    def separation(self, gap, to_wall: bool):
-        """Roughness-tip separation eps (m) of a surface gap (m)."""
-        return gap - self.cell_roughness - (self.wall_roughness if to_wall else self.cell_roughness)
+    def separation(self, gap, to_wall):
+        """Roughness-tip separation eps (m) of a surface gap (m), or of an array of gaps with
+        ``to_wall`` an array of flags alike."""
+        if np.ndim(to_wall) == 0:
+            return gap - self.cell_roughness - (self.wall_roughness if to_wall else self.cell_roughness)
+        return gap - self.cell_roughness - np.where(to_wall, self.wall_roughness, self.cell_roughness)
 
     def force(self, eps):
         """F(eps) in N (eq. 3.1); eps > 0."""
@@ -131,8 +134,7 @@ class BoundRepulsion(BoundInteraction):
         if not gaps:
             return None
         pairs = np.array([(gap.body, gap.other) for gap in gaps])
-        eps = (np.array([gap.distance for gap in gaps]) - rep.cell_roughness
-               - np.where(pairs[:, 1] == WALL, rep.wall_roughness, rep.cell_roughness))  # separation()
+        eps = rep.separation(np.array([gap.distance for gap in gaps]), pairs[:, 1] == WALL)
         if np.any(eps <= 0.0):
             gap = gaps[int(np.flatnonzero(eps <= 0.0)[0])]
             other = "the wall" if gap.other == WALL else f"body {body_label(bodies[gap.other].name, gap.other)}"
