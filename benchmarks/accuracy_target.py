@@ -19,6 +19,7 @@ check's (VALIDATION), cases the margins were not fitted to.
     python benchmarks/accuracy_target.py [--accuracies 1e-2 1e-3 1e-4] [--parts wall fixed pair]
     python benchmarks/accuracy_target.py --front results/bench/accuracy_front.csv   # choices only
     python benchmarks/accuracy_target.py --front docs/figures/accuracy_front.csv --calibrate
+    python benchmarks/accuracy_target.py --front docs/figures/accuracy_front.csv --add-density 3 --calibrate
     python benchmarks/accuracy_target.py --validate [--accuracies 1e-2 1e-3]
 
 Writes results/bench/accuracy_target.csv, accuracy_front.csv and accuracy_target.png (estimate
@@ -57,11 +58,13 @@ def true_errors(part: str, gap: float, mesh, options) -> dict:
     return {name: max(errors[q] for q in quantities) for name, quantities in table_errors(part, errors).items()}
 
 
-def front(part: str, gap: float) -> list[dict]:
-    """Every setting of the error model at this case: true error (of each table part it gives) and
-    time."""
+def front(part: str, gap: float, density_orders=None) -> list[dict]:
+    """Every setting of the error model at this case (of ``density_orders`` only, if given): true
+    error (of each table part it gives) and time."""
     rows = []
     for k, p, ratio in settings():
+        if density_orders is not None and p not in density_orders:
+            continue
         mesh, options = wb.mesh.sphere(1.0, k), wb.SolverOptions(density_order=p, contact_refinement=ratio)
         if unknowns_of(part, mesh, gap, options) > MAX_UNKNOWNS:
             continue
@@ -175,6 +178,9 @@ def main():
     parser.add_argument("--accuracies", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4])
     parser.add_argument("--parts", nargs="+", choices=tuple(CASES), default=list(CASES))
     parser.add_argument("--front", help="a front measured before (accuracy_front.csv): only the choices are made")
+    parser.add_argument("--add-density", type=int, nargs="+",
+                        help="with --front: measure the front of these density orders' settings (added to the"
+                             " error model since) and write the merged front")
     parser.add_argument("--calibrate", action="store_true",
                         help="print the safety margins per table (unrefined, refined) derived from the check")
     parser.add_argument("--validate", action="store_true",
@@ -195,6 +201,13 @@ def main():
         with open(args.front) as f:
             fronts = [{**r, "gap": float(r["gap"]), "k": int(r["k"]), "p": int(r["p"]), "ratio": float(r["ratio"]),
                        "error": float(r["error"]), "ms": float(r["ms"])} for r in csv.DictReader(f)]
+        if args.add_density:
+            fronts = [r for r in fronts if r["p"] not in args.add_density]
+            progress = Progress(len(cases))
+            for part, gap in cases:
+                fronts += front(part, gap, args.add_density)
+                progress.done(f"{part} gap {gap}, density orders {args.add_density}")
+            print(f"front: {write_csv('accuracy_front.csv', fronts)}")
     else:
         fronts, progress = [], Progress(len(cases))
         for part, gap in cases:

@@ -100,7 +100,7 @@ def test_a_refined_setting_has_the_refined_margin_only_where_its_refinement_spli
 
 
 @pytest.mark.parametrize("changes, message", [(dict(contact_refinement=1.0), "chooses it"),
-                                              (dict(density_order=3), "densities 1 and 2"),
+                                              (dict(quadrature_order=3), "quadrature_order"),
                                               (dict(), "accuracy")])
 def test_options_the_target_cannot_honour_are_refused(changes, message):
     with pytest.raises(OptionError, match=message):

@@ -159,21 +159,27 @@ def refinement_threshold(k: int, ratio: float) -> float:
 # elements the refinement splits changes in steps (k = 6, p = 2, ratio 0.3 at h/a = 1.05: 1.3e-3
 # in shear, where the same setting measured 2.0e-4 at 1.03 and 2.8e-4 at 1.07). With the
 # estimate alone 10 of the check's 75 reachable cases were above the accuracy, at most 1.97
-# times. The margins are benchmarks/accuracy_target.py --calibrate's, on a grid of 0.1, from the
-# check's 84 cases (21 per table: h/a 1.02-3 or pair gaps 0.04-4, at 1e-2, 1e-3, 1e-4): at least
-# the 95th percentile of true / estimate over every setting of the front at the table's cases
-# with an estimate within 1e-2 (unrefined 1.14-1.24, refined 1.22-2.00), and large enough that
-# no case of the check is above its accuracy but those the target warns it cannot reach (the
-# shear table's refined 3.6: the case above, true / estimate 4.6). The wall and pair tables keep
-# the refined 2.1 calibrated before their cells of 16 000-21 000 unknowns were measured (2.0 now).
-MARGINS = {"wall": (1.2, 2.1), "shear": (1.3, 3.6), "fixed": (1.2, 1.3), "pair": (1.2, 2.1)}
+# times. The margins start from benchmarks/accuracy_target.py --calibrate's, on a grid of 0.1,
+# from the check's 84 cases (21 per table: h/a 1.02-3 or pair gaps 0.04-4, at 1e-2, 1e-3, 1e-4):
+# at least the 95th percentile of true / estimate over every setting of the front at the table's
+# cases with an estimate within 1e-2 (unrefined 1.11-1.28, refined 1.14-2.56), and large enough
+# that no case of the check is above its accuracy but those the target warns it cannot reach (the
+# shear table's refined 3.6: k = 6, p = 2, ratio 0.3 at h/a 1.05, true / estimate 4.6; the held
+# table's unrefined 1.3: the unrefined k = 2 sphere with the biquadratic density at h/a 1.02,
+# 8.3e-3 estimated between its 2.4e-2 at 1.015 and 1.3e-3 at 1.03, 0.17 true, is then bounded at
+# 1.07e-2 and not taken at 1e-2). The wall and pair tables' refined margins are raised beyond
+# that, to 2.3 and 3.0, so that the bound holds the true error in every case of the check but
+# one (two spheres 0.4 radius apart, unrefined, at 1e-3): a free sphere at h/a 1.05 on k = 2,
+# p = 3, ratio 0.2 (true / estimate 2.28) and two spheres 0.2 radius apart on k = 3, p = 2,
+# ratio 0.6 (2.97), both within their accuracy of 1e-2.
+MARGINS = {"wall": (1.3, 2.3), "shear": (1.3, 3.6), "fixed": (1.3, 1.4), "pair": (1.2, 3.0)}
 
-# the wall's gap, and half the gap between two bodies for the bilinear density (hydro/geometry.py's
-# body_gap_share), is what the refinement resolves
-WALL_MODEL = _Model(table.WALL, table.WALL_GAPS, {1: 1.0, 2: 1.0}, MARGINS["wall"])
-SHEAR_MODEL = _Model(table.SHEAR, table.WALL_GAPS, {1: 1.0, 2: 1.0}, MARGINS["shear"])
-FIXED_MODEL = _Model(table.FIXED, table.WALL_GAPS, {1: 1.0, 2: 1.0}, MARGINS["fixed"])
-PAIR_MODEL = _Model(table.PAIR, table.PAIR_GAPS, {1: 1.0, 2: 0.5}, MARGINS["pair"])
+# the wall's gap, and half the gap between two bodies for the bilinear and biquadratic densities
+# (hydro/geometry.py's body_gap_share), is what the refinement resolves
+WALL_MODEL = _Model(table.WALL, table.WALL_GAPS, {1: 1.0, 2: 1.0, 3: 1.0}, MARGINS["wall"])
+SHEAR_MODEL = _Model(table.SHEAR, table.WALL_GAPS, {1: 1.0, 2: 1.0, 3: 1.0}, MARGINS["shear"])
+FIXED_MODEL = _Model(table.FIXED, table.WALL_GAPS, {1: 1.0, 2: 1.0, 3: 1.0}, MARGINS["fixed"])
+PAIR_MODEL = _Model(table.PAIR, table.PAIR_GAPS, {1: 1.0, 2: 0.5, 3: 0.5}, MARGINS["pair"])
 
 
 def _time_by_unknowns() -> dict:
@@ -181,7 +187,7 @@ def _time_by_unknowns() -> dict:
     to every measured solve of both tables (wall: 127-128 solves per order, 72-20 736 unknowns;
     the fit's log residual 0.24-0.33 in standard deviation, at most 1.1: within a factor 3.0)."""
     fits = {}
-    for p in (1, 2):
+    for p in sorted({p for _, p, _ in table.WALL}):
         cells = np.array([c[1:] for tab in (table.WALL, table.PAIR) for (_, q, _), row in tab.items() if q == p
                           for c in row if c is not None], dtype=float)
         x = np.log(cells[:, 0])

@@ -144,7 +144,7 @@ class MobilitySolver:
         self.device = device
         runtime.resolve_device(device)  # a device this machine lacks: DeviceError before any work
         self.options = (options or SolverOptions()).resolved()
-        self.quadrature = QuadratureOptions(order=self.options.quadrature_order,
+        self.quadrature = QuadratureOptions(order=self.options.element_quadrature,
                                             adaptive=self.options.adaptive_quadrature,
                                             near_factor=self.options.near_factor)
         self.keep_systems = bool(keep_systems)

@@ -28,6 +28,12 @@ DEFAULT_CONTACT_REFINEMENT = {1: 3.0, 2: 1.1, 3: 1.1}
 # element integrals' from 2 (errors against the exact series unchanged to 3 digits from 3, k = 3
 # to 8, h/a = 1.5 and 1.1); a bilinear one's does not
 NEAR_FACTOR = {1: 2.0, 2: 3.0, 3: 3.0}
+# Gauss points per direction on an element by density order when none is given: 2 x 2 reaches
+# the seed's 3 x 3 accuracy with the constant density at 60 % of the cost (benchmarks/pareto.py)
+# and serves the bilinear one; the biquadratic density needs 3 x 3 (two k = 4 spheres 0.02 radius
+# apart, ratio 0.25, pushed together: 2.0e-2 off the exact with 2 x 2, 1.5e-3 with 3 x 3;
+# benchmarks/two_spheres.py --density 3)
+QUADRATURE_ORDER = {1: 2, 2: 2, 3: 3}
 # GMRES relative residual by precision when none is given: float32 products carry ~1e-7 of
 # round-off, so 1e-8 is out of their reach (the stability map: 1e-6 converges down to gaps of
 # 0.1 radius)
@@ -133,9 +139,10 @@ class SolverOptions:
     warpbem.options.OptionError: quadrature_order: 0 is outside the allowed range [1, 10]
     """
 
-    quadrature_order: int = option(2, "Gauss points per direction on an element and on each adaptive sub-panel"
-                                   " (2 x 2 reaches the seed's 3 x 3 accuracy at 60 % of the cost:"
-                                   " benchmarks/pareto.py)", low=1, high=10)
+    quadrature_order: int | None = option(
+        None, "Gauss points per direction on an element and on each adaptive sub-panel. Default by density"
+        " order: 2 for 1 and 2 (2 x 2 reaches the seed's 3 x 3 accuracy at 60 % of the cost: benchmarks/pareto.py),"
+        " 3 for 3", kind=int, low=1, high=10)
     adaptive_quadrature: bool = option(True, "subdivide nearly singular element integrals (near a collocation"
                                        " point or its wall image)")
     density_order: int | None = option(
@@ -234,8 +241,9 @@ class SolverOptions:
                               " grand_mobility = 'pairs' (the whole system's holds every cell already)")
         if self.accuracy is not None and self.contact_refinement is not None:
             raise OptionError("contact_refinement: the accuracy target chooses it; give one or the other")
-        if self.accuracy is not None and self.density_order == 3:
-            raise OptionError("density_order: the accuracy target's error model holds densities 1 and 2, not 3")
+        if self.accuracy is not None and self.quadrature_order is not None:
+            raise OptionError("quadrature_order: the accuracy target takes each density order's own (QUADRATURE_ORDER,"
+                              " what its error model measured); give one or the other")
         if self.reuse_tolerance is not None:  # else checked once the context gives it (resolved)
             self._check_reuse_interaction(self.reuse_tolerance)
 
@@ -257,7 +265,7 @@ class SolverOptions:
         order = self.density_order or (TIME_STEPPING_DENSITY_ORDER if time_stepping else SOLVE_DENSITY_ORDER)
         refinement = DEFAULT_CONTACT_REFINEMENT[order] if self.contact_refinement is None else self.contact_refinement
         return dataclasses.replace(self, density_order=order, contact_refinement=refinement, tolerance=tolerance,
-                                   reuse_tolerance=reuse)
+                                   reuse_tolerance=reuse, quadrature_order=self.quadrature_order or QUADRATURE_ORDER[order])
 
     def without_accuracy(self) -> "SolverOptions":
         """These options with no accuracy target, for the solves it does not cover (the traction,
@@ -275,6 +283,12 @@ class SolverOptions:
             return f"{state} (set)"
         return f"{state} (auto: {fixed_cells} fixed cells" + ("" if state == "on" else
                                                              f", below {NEAR_FAR_FIXED_CELLS}") + ")"
+
+    @property
+    def element_quadrature(self) -> int:
+        """Gauss points per direction on an element: as given, else by density order
+        (QUADRATURE_ORDER; resolved options carry it)."""
+        return self.quadrature_order or QUADRATURE_ORDER[self.density_order or SOLVE_DENSITY_ORDER]
 
     @property
     def near_factor(self) -> float:
