@@ -55,8 +55,8 @@ SUBDIVISIONS = (2, 3, 4, 6)
 # refinement ratios by density order: the bilinear density's unknowns grow 4 times faster under
 # refinement, and its ratio 3 takes 37 000 unknowns (131 s) at h/a = 1.015 on the k = 2 sphere; the
 # biquadratic one's 2.25 times faster again, and it resolves the gap with fewer splits (two k = 4
-# spheres 0.05 radius apart pushed together: 3.2e-4 off the exact at ratio 0.35, 6 480 unknowns,
-# against 9.3e-4 for the bilinear density at 1.1 with 3 x 3 points, 9 792; two_spheres.py)
+# spheres 0.05 radius apart pushed together, measured_pair: 1.7e-3 off the exact at ratio 0.35
+# with 6 480 unknowns, against 4.5e-3 for the bilinear density at its default 1.1 with 9 792)
 RATIOS = {1: (0.0, 0.3, 1.1, 3.0), 2: (0.0, 0.3, 0.6, 1.1), 3: (0.0, 0.2, 0.35, 0.5)}
 PARTS = ("wall", "fixed", "pair")  # measured; "shear" comes with "wall"
 TABLE_PARTS = {"wall": ("wall", "shear"), "fixed": ("fixed",), "pair": ("pair",)}

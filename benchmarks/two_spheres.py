@@ -13,7 +13,7 @@ the 12 loads' solve. Then the accuracy target (``SolverOptions(accuracy=1e-3)``)
 sphere at 0.05 and 0.02 radii: the setting it chooses, its estimate and the error it reaches, on
 the mobility and on the pair pushed together (``target_rows``), with that solve's time.
 
-    python benchmarks/two_spheres.py [--quick] [--k 2 3 4] [--density 2 1] [--device cuda:0]
+    python benchmarks/two_spheres.py [--quick] [--k 2 3 4] [--density 2 1] [--device cuda:0] [--target-only]
 
 Writes results/bench/two_spheres.csv (and two_spheres_target.csv) and two_spheres.png.
 """
@@ -136,17 +136,20 @@ def main():
     parser.add_argument("--k", type=int, nargs="+", default=None, help="sphere subdivisions (default 2 3 4)")
     parser.add_argument("--density", type=int, nargs="+", default=[2, 1], help="density orders p (default 2 1)")
     parser.add_argument("--no-target", action="store_true", help="leave out the accuracy target's part")
+    parser.add_argument("--target-only", action="store_true", help="only the accuracy target's part (no chart)")
     args = parser.parse_args()
+    targets = []
+    if not args.no_target:
+        targets = target_rows((0.1,) if args.quick else TARGET_GAPS, args.device)
+        write_csv("two_spheres_target.csv", targets)
+    if args.target_only:
+        return
     ks = args.k or ([2, 3] if args.quick else [2, 3, 4])
     settings = [(k, p) for k in ks for p in args.density]
     gaps = (1.0, 0.1) if args.quick else GAPS
     rows = rows_for(settings, gaps, args.device)
     print_table(rows)
     write_csv("two_spheres.csv", rows)
-    targets = []
-    if not args.no_target:
-        targets = target_rows((0.1,) if args.quick else TARGET_GAPS, args.device)
-        write_csv("two_spheres_target.csv", targets)
     print("chart:", chart(rows, settings, targets, output("two_spheres.png")))
 
 

@@ -184,8 +184,8 @@ PAIR_MODEL = _Model(table.PAIR, table.PAIR_GAPS, {1: 1.0, 2: 0.5, 3: 0.5}, MARGI
 
 def _time_by_unknowns() -> dict:
     """Per density order, the coefficients of log(ms) as a quadratic in log(unknowns), fitted
-    to every measured solve of both tables (wall: 127-128 solves per order, 72-20 736 unknowns;
-    the fit's log residual 0.24-0.33 in standard deviation, at most 1.1: within a factor 3.0)."""
+    to every measured solve of both tables (255 solves per order, 72-20 736 unknowns; the fit's
+    log residual 0.24-0.33 in standard deviation, at most 1.1: within a factor 3.0)."""
     fits = {}
     for p in sorted({p for _, p, _ in table.WALL}):
         cells = np.array([c[1:] for tab in (table.WALL, table.PAIR) for (_, q, _), row in tab.items() if q == p

@@ -30,9 +30,9 @@ DEFAULT_CONTACT_REFINEMENT = {1: 3.0, 2: 1.1, 3: 1.1}
 NEAR_FACTOR = {1: 2.0, 2: 3.0, 3: 3.0}
 # Gauss points per direction on an element by density order when none is given: 2 x 2 reaches
 # the seed's 3 x 3 accuracy with the constant density at 60 % of the cost (benchmarks/pareto.py)
-# and serves the bilinear one; the biquadratic density needs 3 x 3 (two k = 4 spheres 0.02 radius
-# apart, ratio 0.25, pushed together: 2.0e-2 off the exact with 2 x 2, 1.5e-3 with 3 x 3;
-# benchmarks/two_spheres.py --density 3)
+# and serves the bilinear one; the biquadratic density needs 3 x 3 (two k = 4 spheres pushed
+# together 0.05 radius apart, ratio 0.35: 7.2e-3 off the exact with 2 x 2, 1.7e-3 with 3 x 3; 0.02
+# apart, ratio 0.25: 2.5e-2 and 6.7e-3; benchmarks/error_model.py's measured_pair at these settings)
 QUADRATURE_ORDER = {1: 2, 2: 2, 3: 3}
 # GMRES relative residual by precision when none is given: float32 products carry ~1e-7 of
 # round-off, so 1e-8 is out of their reach (the stability map: 1e-6 converges down to gaps of
