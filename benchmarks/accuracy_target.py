@@ -74,6 +74,15 @@ def front(part: str, gap: float, density_orders=None) -> list[dict]:
     return rows
 
 
+def measured_front(cases, density_orders=None) -> list[dict]:
+    """``front`` at every case (of ``density_orders``' settings only, if given)."""
+    rows, progress = [], Progress(len(cases))
+    for part, gap in cases:
+        rows += front(part, gap, density_orders)
+        progress.done(f"{part} gap {gap}" + ("" if density_orders is None else f", density orders {density_orders}"))
+    return rows
+
+
 def chosen_for(part: str, gap: float, target: float):
     """The target's choice for the case's bodies on the library mesh, as ``MobilitySolver`` makes
     it (its solve is then the front's solve of that setting: the same meshes, the same options;
@@ -197,22 +206,13 @@ def main():
         return
     cases = [(part, gap) for part in args.parts for gap in CASES[part]]
     checked = [(name, gap) for part, gap in cases for name in TABLE_PARTS[part]]
+    fronts = []
     if args.front:
         with open(args.front) as f:
             fronts = [{**r, "gap": float(r["gap"]), "k": int(r["k"]), "p": int(r["p"]), "ratio": float(r["ratio"]),
                        "error": float(r["error"]), "ms": float(r["ms"])} for r in csv.DictReader(f)]
-        if args.add_density:
-            fronts = [r for r in fronts if r["p"] not in args.add_density]
-            progress = Progress(len(cases))
-            for part, gap in cases:
-                fronts += front(part, gap, args.add_density)
-                progress.done(f"{part} gap {gap}, density orders {args.add_density}")
-            print(f"front: {write_csv('accuracy_front.csv', fronts)}")
-    else:
-        fronts, progress = [], Progress(len(cases))
-        for part, gap in cases:
-            fronts += front(part, gap)
-            progress.done(f"{part} gap {gap}")
+    if not args.front or args.add_density:  # measure the front, or the added orders' part of it
+        fronts = [r for r in fronts if r["p"] not in args.add_density] + measured_front(cases, args.add_density)
         print(f"front: {write_csv('accuracy_front.csv', fronts)}")
     if args.calibrate:
         print(f"margins: {calibrate(fronts, checked, args.accuracies)} (in use: {accuracy.MARGINS})")

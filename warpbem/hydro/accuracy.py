@@ -100,13 +100,15 @@ class _Model:
     0.3: 4.7e-2 unrefined, where the refined points on either side, 4.4e-3 at 1.15 and the
     unrefined 7.5e-3 at 1.3, interpolate to 6e-3)."""
 
-    def __init__(self, measured: dict, gaps: tuple, gap_share: dict, margins: tuple[float, float]):
+    def __init__(self, measured: dict, gaps: tuple, between_bodies: bool, margins: tuple[float, float]):
         self.margins = margins
         self.settings = list(measured)
         index = {setting: i for i, setting in enumerate(self.settings)}
         self.unrefined = np.array([index[(k, p, 0.0)] for k, p, _ in self.settings])
         self.refining = np.array([ratio > 0 for _, _, ratio in self.settings])
-        self.threshold = np.array([refinement_threshold(k, ratio) / gap_share[p] for k, p, ratio in self.settings])
+        # the refinement resolves the wall's gap, and its share of the gap between two bodies
+        share = {p: refinement.body_gap_share(p) if between_bodies else 1.0 for _, p, _ in self.settings}
+        self.threshold = np.array([refinement_threshold(k, ratio) / share[p] for k, p, ratio in self.settings])
         cells = [[(np.inf, np.inf, np.inf) if c is None else c for c in row] for row in measured.values()]
         self.log_gaps = np.log(gaps)
         error = np.log([[c[0] for c in row] for row in cells])
@@ -174,12 +176,10 @@ def refinement_threshold(k: int, ratio: float) -> float:
 # ratio 0.6 (2.97), both within their accuracy of 1e-2.
 MARGINS = {"wall": (1.3, 2.3), "shear": (1.3, 3.6), "fixed": (1.3, 1.4), "pair": (1.2, 3.0)}
 
-# the wall's gap, and half the gap between two bodies for the bilinear and biquadratic densities
-# (hydro/geometry.py's body_gap_share), is what the refinement resolves
-WALL_MODEL = _Model(table.WALL, table.WALL_GAPS, {1: 1.0, 2: 1.0, 3: 1.0}, MARGINS["wall"])
-SHEAR_MODEL = _Model(table.SHEAR, table.WALL_GAPS, {1: 1.0, 2: 1.0, 3: 1.0}, MARGINS["shear"])
-FIXED_MODEL = _Model(table.FIXED, table.WALL_GAPS, {1: 1.0, 2: 1.0, 3: 1.0}, MARGINS["fixed"])
-PAIR_MODEL = _Model(table.PAIR, table.PAIR_GAPS, {1: 1.0, 2: 0.5, 3: 0.5}, MARGINS["pair"])
+WALL_MODEL = _Model(table.WALL, table.WALL_GAPS, False, MARGINS["wall"])
+SHEAR_MODEL = _Model(table.SHEAR, table.WALL_GAPS, False, MARGINS["shear"])
+FIXED_MODEL = _Model(table.FIXED, table.WALL_GAPS, False, MARGINS["fixed"])
+PAIR_MODEL = _Model(table.PAIR, table.PAIR_GAPS, True, MARGINS["pair"])
 
 
 def _time_by_unknowns() -> dict:

@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import runtime
 from ..surfaces import quad9
-from ..surfaces.refinement import element_radius, refine_near_contact
+from ..surfaces.refinement import body_gap_share, element_radius, refine_near_contact
 
 
 @dataclass(frozen=True, eq=False)
@@ -47,12 +47,8 @@ class SurfaceGeometry:
                     density_order: int = 1) -> "SurfaceGeometry":
         nodes = [b.world_nodes()[b.mesh.elements] / length_scale for b in bodies]
         exempt = None if refine_fixed_at_wall else [b.fixed for b in bodies]
-        # half the gap between bodies for the bilinear density; the constant density (the
-        # scenes' and the traction's) keeps the whole gap: half of it took 2.5 times the time of
-        # the recruitment scene's steps (adherent cells re-refined as a free cell passes) for
-        # squeeze errors that are the constant density's anyway (docs/benchmarks.md, stability map)
         nodes, unresolved, parents = refine_near_contact(nodes, wall, contact_refinement, wall_exempt=exempt,
-                                                         body_gap_share=0.5 if density_order > 1 else 1.0)
+                                                         body_gap_share=body_gap_share(density_order))
         counts = [len(n) for n in nodes]
         element_nodes = np.concatenate(nodes)
         stops = np.cumsum(counts)

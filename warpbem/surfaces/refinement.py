@@ -62,6 +62,15 @@ REFERENCE_ELEMENT_SIZE = 0.2755
 WARN_FRACTION = 0.02
 
 
+def body_gap_share(density_order: int) -> float:
+    """The share of the gap to another body the elements resolve (``resolved_length``): half of it
+    for the bilinear and biquadratic densities; the whole gap for the constant density (the
+    scenes' and the traction's): half of it took 2.5 times the time of the recruitment scene's
+    steps (adherent cells re-refined as a free cell passes) for squeeze errors that are the
+    constant density's anyway (docs/benchmarks.md, stability map)."""
+    return 0.5 if density_order > 1 else 1.0
+
+
 def resolved_length(gap: np.ndarray, neighbour: np.ndarray, body_gap_share: float) -> np.ndarray:
     """The length the elements must resolve: the gap to the wall, ``body_gap_share`` of the gap
     to another body (each body meets the other's flow at the mid-plane, a wall at half the gap:
