@@ -4,7 +4,7 @@ lattice of gaps (warpbem/dynamics/close_pairs.py, ``[solver] close_pairs = "lubr
 import numpy as np
 import pytest
 
-from warpbem.dynamics.close_pairs import generalised, lattice_gap, with_films
+from warpbem.dynamics.close_pairs import generalised, lattice_gap, with_resistance
 from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion
 from warpbem.dynamics.model import Flow, Model, SolverOptions, build_solver
 from warpbem.hydro import two_spheres
@@ -76,7 +76,7 @@ def test_far_below_its_lattice_the_squeeze_follows_jeffrey_and_onishi():
 
 
 def test_films_are_added_to_the_assembled_resistance():
-    """with_films gives M = (Q^-1 + sum P^T L P)^-1 and u = M Q^-1 u_s (the holding loads kept)
+    """with_resistance gives M = (Q^-1 + sum P^T L P)^-1 and u = M Q^-1 u_s (the holding loads kept)
     for a smooth grand mobility Q of four cells and films between cells 0-1 and 1-2, against the
     inverses formed directly; cell 3, in no film, keeps its own rows but feels the others' change."""
     rng = np.random.default_rng(1)
@@ -96,7 +96,7 @@ def test_films_are_added_to_the_assembled_resistance():
     expected_u = expected_q @ np.linalg.solve(q, u)
     by_cell, flow = q.reshape(6 * n, n, 6), u.reshape(n, 6)
     parts = (flow[:, :3], flow[:, 3:] / radii[:, None], by_cell[:, :, :3], by_cell[:, :, 3:] / radii[None, :, None])
-    velocity, angular, basis_velocity, basis_angular = with_films(*parts, radii, films)
+    velocity, angular, basis_velocity, basis_angular = with_resistance(*parts, radii, [(np.array([i, j]), film, None) for i, j, film in films])
     got_q = np.concatenate([basis_velocity, basis_angular * radii[None, :, None]], axis=2).reshape(6 * n, 6 * n)
     got_u = np.concatenate([velocity, angular * radii[:, None]], axis=1).ravel()
     assert np.abs(got_q - expected_q).max() < 1e-12 * np.abs(expected_q).max()
@@ -117,7 +117,7 @@ def test_a_cell_between_two_close_neighbours_is_held_by_both_films():
     model = Model([MESH] * 3, [False] * 3, Flow(100.0, VISCOSITY), solver=SolverOptions())
     whole = HydrodynamicSolves(model, build_solver(model.solver, model.flow, "cpu"))
     exact, _ = motion(Motion.of(whole.mobility.solve(bodies)), whole._grand_mobility(bodies))
-    three = dict(EXACT, grand_mobility="pairs")
+    three = dict(EXACT, grand_mobility="pairs", close_clusters="none")  # the films alone (test_close_clusters.py)
     assembled = {}
     for close_pairs in ("lubrication", "lattice"):
         model = Model([MESH] * 3, [False] * 3, Flow(100.0, VISCOSITY),

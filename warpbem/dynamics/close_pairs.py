@@ -46,7 +46,7 @@ smooth in the gap,
 
 S the terms of R_JO that diverge at contact (``two_spheres.singular_resistance_matrix``), L
 positive semidefinite and zero where the pair stops being close, and the films are added back to
-the assembled resistance of all the cells, M = (M_sum^-1 + sum L)^-1 (``with_films``: Stokesian
+the assembled resistance of all the cells, M = (M_sum^-1 + sum L)^-1 (``with_resistance``: Stokesian
 dynamics' split of the resistance into a many-body far part and pairwise lubrication, Durlofsky,
 Brady & Bossis 1987, J. Fluid Mech. 180:21). For two cells this is their pair snapshot again.
 Three 5 um k = 3 cells in a line at the rolling height, against their whole system's solve
@@ -106,6 +106,15 @@ def snapshot_parts(q: np.ndarray, u: np.ndarray, radii) -> tuple:
     radii = np.broadcast_to(np.asarray(radii, float), (n,))
     by_cell, u = q.reshape(6 * n, n, 6), u.reshape(n, 6)
     return u[:, :3], u[:, 3:] / radii[:, None], by_cell[:, :, :3].copy(), by_cell[:, :, 3:] / radii[None, :, None]
+
+
+def generalised_matrices(velocity, angular, basis_velocity, basis_angular, radii) -> tuple[np.ndarray, np.ndarray]:
+    """(Q (6n, 6n), u (6n,)) of n cells of ``radii`` ((n,) m) from their parts in the layout of
+    HydrodynamicSolves._grand_mobility (flow velocity, angular velocity (n, 3), basis velocity,
+    angular velocity (6n, n, 3)): ``snapshot_parts`` undone."""
+    n = len(radii)
+    q = np.concatenate([basis_velocity, basis_angular * radii[None, :, None]], axis=2).reshape(6 * n, 6 * n)
+    return q, np.concatenate([velocity, angular * radii[:, None]], axis=1).ravel()
 
 
 def turn(angle: float) -> np.ndarray:
@@ -231,25 +240,28 @@ def _gap_weights(gap: float):
     return (lower, 1.0 - share), (lower + 1, share)
 
 
-def with_films(velocity, angular, basis_velocity, basis_angular, radii, films):
+def with_resistance(velocity, angular, basis_velocity, basis_angular, radii, terms):
     """The flow's motion (n, 3) each and the basis's (6n, n, 3) each of cells whose smooth parts
-    are these, with the films' resistances added: ``films`` ((i, j, L (12, 12)) per close pair).
-    The smooth grand mobility Q (generalised: (U, a Omega) of (F, T / a)) and the films' L
-    combine as (Q^-1 + P^T L P)^-1 = Q - Q P^T (I + L P Q P^T)^-1 L P Q (Woodbury; P the close
-    cells' rows, L positive semidefinite, so nothing is inverted but a matrix of their size), and
-    the flow's motion u = Q f (f the holding loads, on which films between cells held still do
-    no work) becomes u - Q P^T (I + L P Q P^T)^-1 L P u."""
-    n = len(radii)
-    q = np.concatenate([basis_velocity, basis_angular * radii[None, :, None]], axis=2).reshape(6 * n, 6 * n)
-    u = np.concatenate([velocity, angular * radii[:, None]], axis=1).ravel()
-    cells = sorted({c for i, j, _ in films for c in (i, j)})
+    are these, with resistances added: ``terms`` ((cells (k,), X (6k, 6k), g (6k,) or None) each:
+    a close pair's film L with no loads, or a close cluster's correction and its holding loads,
+    close_clusters.py). The smooth grand mobility Q (generalised: (U, a Omega) of (F, T / a)) and
+    the sum X of the terms combine as (Q^-1 + P^T X P)^-1 = Q - Q P^T (I + X P Q P^T)^-1 X P Q
+    (Woodbury; P the rows of the cells in a term, so nothing is inverted but a matrix of their
+    size), and the flow's motion u = Q f (f the holding loads) becomes M (f + P^T g) =
+    u - Q P^T (I + X P Q P^T)^-1 (X P u - g): a film between cells held still does no work."""
+    q, u = generalised_matrices(velocity, angular, basis_velocity, basis_angular, radii)
+    cells = sorted({int(c) for term_cells, _, _ in terms for c in term_cells})
     where = {c: k for k, c in enumerate(cells)}
     rows = (6 * np.array(cells)[:, None] + np.arange(6)).ravel()
-    film = np.zeros((len(rows), len(rows)))
-    for i, j, pair_film in films:
-        pair_rows = np.concatenate([6 * where[i] + np.arange(6), 6 * where[j] + np.arange(6)])
-        film[np.ix_(pair_rows, pair_rows)] += pair_film
-    damped = np.eye(len(rows)) + film @ q[np.ix_(rows, rows)]
-    correction = q[:, rows] @ np.linalg.solve(damped, film @ np.concatenate([q[rows], u[rows, None]], axis=1))
+    added, loads = np.zeros((len(rows), len(rows))), np.zeros(len(rows))
+    for term_cells, resistance, term_loads in terms:
+        term_rows = (6 * np.array([where[int(c)] for c in term_cells])[:, None] + np.arange(6)).ravel()
+        added[np.ix_(term_rows, term_rows)] += resistance
+        if term_loads is not None:
+            loads[term_rows] += term_loads
+    damped = np.eye(len(rows)) + added @ q[np.ix_(rows, rows)]
+    right = added @ np.concatenate([q[rows], u[rows, None]], axis=1)
+    right[:, -1] -= loads
+    correction = q[:, rows] @ np.linalg.solve(damped, right)
     q, u = q - correction[:, :-1], u - correction[:, -1]
     return snapshot_parts(0.5 * (q + q.T), u, radii)

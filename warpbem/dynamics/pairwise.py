@@ -58,7 +58,8 @@ import numpy as np
 
 from ..hydro.options import NEAR_RADII
 from ..surfaces.body import Body
-from .close_pairs import ClosePairs, with_films
+from .close_clusters import CloseClusters, clusters
+from .close_pairs import ClosePairs, generalised_matrices, with_resistance
 from .far_field import COUPLING_SHAPES, FarField
 from .many_body import ManyBodyRemainder
 
@@ -180,15 +181,19 @@ class PairwiseMobility:
         self.far = FarField(hydro) if model.solver.far_field == "moments" else None
         self.near_radius = model.solver.near_radius
         self.close = ClosePairs(hydro) if model.solver.close_pairs == "lubrication" else None
+        self.clusters = (CloseClusters(hydro) if self.close is not None and model.solver.close_clusters == "resistance"
+                         else None)
 
     def assemble(self, bodies):
         """(flow velocity, angular velocity (n, 3); basis velocity, angular velocity (6n, n, 3),
         iterations, residual) of the free ``bodies``: each cell's lone snapshot at its fine
         height, plus the pairs' part, plus the many-body remainder if asked for
-        (``many_body.py``), the close pairs' films then added in resistance (``close_pairs.py``)."""
-        velocity, angular, basis_velocity, basis_angular, films = self._pairs_part(bodies)
+        (``many_body.py``), the close pairs' films and the close clusters' three-body parts then
+        added in resistance (``close_pairs.py``, ``close_clusters.py``)."""
+        velocity, angular, basis_velocity, basis_angular, films, near = self._pairs_part(bodies)
         iterations, residual = 0, 0.0
-        for b, (flow, grand) in self._lone_snapshots(bodies, self.hydro.tolerance).items():
+        lone = self._lone_snapshots(bodies, self.hydro.tolerance)
+        for b, (flow, grand) in lone.items():
             velocity[b] += flow.velocity[0]
             angular[b] += flow.angular_velocity[0]
             rows = slice(6 * b, 6 * b + 6)
@@ -199,10 +204,38 @@ class PairwiseMobility:
         if self.remainder is not None:
             for total, part in zip((velocity, angular, basis_velocity, basis_angular), self.remainder.parts(bodies)):
                 total += part
-        if films:  # the close pairs' films, added in resistance to all of the above (close_pairs.py)
-            velocity, angular, basis_velocity, basis_angular = with_films(
-                velocity, angular, basis_velocity, basis_angular, self.radii, films)
+        # the close pairs' films and clusters, added in resistance to all of the above
+        terms = [(np.array([i, j]), film, None) for i, j, film in films]
+        if films and self.clusters is not None:
+            terms += self._cluster_terms(bodies, films, near, lone)
+        if terms:
+            velocity, angular, basis_velocity, basis_angular = with_resistance(
+                velocity, angular, basis_velocity, basis_angular, self.radii, terms)
         return velocity, angular, basis_velocity, basis_angular, iterations, residual
+
+    def _cluster_terms(self, bodies, films, near, lone) -> list:
+        """[(cells, the correction to their resistance, to their holding loads)] of the close
+        clusters among the films' pairs (close_clusters.py), from the near pairs' rows and lone
+        snapshots at the pair heights (``near``, of ``_pairs_part``) and the cells' own lone
+        snapshots (``lone``)."""
+        near_first, near_second, rows, at_pair_heights = near
+        film_of = {(i, j): film for i, j, film in films}
+        first, second = (np.array([pair[k] for pair in film_of]) for k in (0, 1))
+        terms = []
+        for cells in clusters(first, second, len(bodies)):
+            local = {int(c): k for k, c in enumerate(cells)}
+            pairs = {}
+            for p in np.flatnonzero(np.isin(near_first, cells) & np.isin(near_second, cells)):
+                i, j = int(near_first[p]), int(near_second[p])
+                parts = (part.reshape(shape) for part, shape in
+                         zip(np.split(rows[p], np.cumsum(PART_SIZES)[:-1]), PART_SHAPES))
+                pairs[local[i], local[j]] = generalised_matrices(*parts, self.radii[[i, j]]) + (film_of.get((i, j)),)
+            own, shared = ([generalised_matrices(snapshots[c][0].velocity, snapshots[c][0].angular_velocity,
+                                                 snapshots[c][1].velocity, snapshots[c][1].angular_velocity,
+                                                 self.radii[[c]]) for c in cells.tolist()]
+                           for snapshots in (lone, at_pair_heights))
+            terms.append((cells,) + self.clusters.correction(bodies, cells, own, shared, pairs))
+        return terms
 
     def _pairs_part(self, bodies):
         """sum over the pairs within the cut-off of [pair snapshot, interpolated at the pair's
@@ -263,7 +296,7 @@ class PairwiseMobility:
             basis_velocity[b, :, b] -= pairs_of[b] * lone_grand.velocity[:, 0]
             basis_angular[b, :, b] -= pairs_of[b] * lone_grand.angular_velocity[:, 0]
         return (velocity, angular, basis_velocity.reshape(6 * n, n, 3), basis_angular.reshape(6 * n, n, 3),
-                films)
+                films, (near_first, near_second, rows, lone))
 
     def _lone_snapshots(self, bodies, spacing: float, cells=None):
         """{cell: its lone snapshot} of ``cells`` (default all) at their heights snapped to

@@ -68,6 +68,7 @@ DEFAULT_PAIR_CUTOFF = 1e-3
 DEFAULT_SNAPSHOT_STORE_SIZE = 2e9
 FAR_FIELDS = ("moments", "none")
 CLOSE_PAIRS = ("lubrication", "lattice")
+CLOSE_CLUSTERS = ("resistance", "none")
 # pairs of cells farther apart than this many mean outer radii are far (dynamics/far_field.py):
 # measured on two 5 um cells at the rolling height (benchmarks/many_cells.py --parts far): at 7 and
 # 8 radii (35, 40 um) the pair errs by 4.4e-4 and 1.6e-4 of the grand mobility, most of it the second
@@ -208,6 +209,15 @@ class SolverOptions:
                               " (0.1 radius x 2^(k/2)), their films added in resistance among more cells"
                               " (dynamics/close_pairs.py); 'lattice' from the pair lattice of pair_lateral, solving"
                               " the pair as it is where a lattice point is too near", choices=CLOSE_PAIRS)
+    close_clusters: str | None = option(None, "with close_pairs = 'lubrication', three or more cells joined by close"
+                                        " pairs: 'resistance' adds the part their pairs leave out (the middle cell"
+                                        " screening the outer ones) in resistance, from the cluster solved on the"
+                                        " k = 3 sphere with the biquadratic density less its pairs: three cells in a"
+                                        " line 0.2 um apart 2.2e-5 / 1.3e-5 of the grand mobility / flow's motion"
+                                        " against 3.3e-2 / 7.2e-2 without it (dynamics/close_clusters.py); 'none'"
+                                        " leaves it out. Default: 'resistance' with many_body = 'none', else 'none'"
+                                        " (the coarse remainder holds a three-body part of its own)",
+                                        kind=str, choices=CLOSE_CLUSTERS)
     pair_cutoff: float = option(DEFAULT_PAIR_CUTOFF, "with grand_mobility = 'pairs', pairs of cells farther apart"
                                 " along the wall than this do not interact", "m", low=0.0, high=1e-2)
     far_field: str = option("moments", "with grand_mobility = 'pairs', the pairs farther apart than near_radius:"
@@ -239,6 +249,9 @@ class SolverOptions:
         if self.many_body != "none" and self.grand_mobility != "pairs":
             raise OptionError(f"many_body: {self.many_body!r} corrects the pairs' grand mobility; it needs"
                               " grand_mobility = 'pairs' (the whole system's holds every cell already)")
+        if self.close_clusters == "resistance" and self.many_body != "none":
+            raise OptionError(f"close_clusters: 'resistance' with many_body = {self.many_body!r} would count the"
+                              " clusters' three-body part twice; give one or the other")
         if self.accuracy is not None and self.contact_refinement is not None:
             raise OptionError("contact_refinement: the accuracy target chooses it; give one or the other")
         if self.accuracy is not None and self.quadrature_order is not None:
@@ -260,12 +273,14 @@ class SolverOptions:
         tolerance = DEFAULT_TOLERANCE[self.dtype] if self.tolerance is None else self.tolerance
         reuse = (BONDS_REUSE_TOLERANCE if bonds else 0.0) if self.reuse_tolerance is None else self.reuse_tolerance
         self._check_reuse_interaction(reuse)
+        clusters = self.close_clusters or ("resistance" if self.many_body == "none" else "none")
         if self.accuracy is not None:
-            return dataclasses.replace(self, tolerance=tolerance, reuse_tolerance=reuse)
+            return dataclasses.replace(self, tolerance=tolerance, reuse_tolerance=reuse, close_clusters=clusters)
         order = self.density_order or (TIME_STEPPING_DENSITY_ORDER if time_stepping else SOLVE_DENSITY_ORDER)
         refinement = DEFAULT_CONTACT_REFINEMENT[order] if self.contact_refinement is None else self.contact_refinement
         return dataclasses.replace(self, density_order=order, contact_refinement=refinement, tolerance=tolerance,
-                                   reuse_tolerance=reuse, quadrature_order=self.quadrature_order or QUADRATURE_ORDER[order])
+                                   reuse_tolerance=reuse, quadrature_order=self.quadrature_order or QUADRATURE_ORDER[order],
+                                   close_clusters=clusters)
 
     def without_accuracy(self) -> "SolverOptions":
         """These options with no accuracy target, for the solves it does not cover (the traction,

@@ -1,0 +1,198 @@
+"""Three or more cells near contact: the part their pairs leave out, added in resistance
+(``SolverOptions.close_clusters = "resistance"``, with ``close_pairs = "lubrication"``).
+
+In a train of cells near contact the middle cell screens the outer two, a three-body part that
+neither the pairs (``pairwise.py``) nor their films (``close_pairs.py``) hold: three 5 um cells in a
+line 0.5-2 um apart err by 1.1e-2-2.5e-2 in the grand mobility on the pairs with their films.
+Added in mobility, as the many-body remainder of ``many_body.py`` does, the part is not smooth: a
+whole system's mobility near contact holds its films, which a coarse mesh does not resolve and
+the pairs of that mesh cancel only to first order. In resistance the films are pairwise (they
+are local to each gap, Durlofsky, Brady & Bossis 1987, J. Fluid Mech. 180:21), so the three-body
+part
+
+    R_3 = R_system - sum_i R_i - sum_{pairs (i, j)} [R_ij - R_i - R_j],
+
+the whole system's resistance less its pairwise-additive sum, is smooth in the gaps, and a
+coarser discretisation of the cluster gives it, its films cancelling in the difference. A cluster
+(the cells joined by close pairs, three or more) then takes its resistance as the pairwise sum
+of its own pairs (each the pair's snapshot with its film, the close pairs' model) plus R_3 of the
+cluster solved on the k = 3 sphere with the biquadratic density, refined at contact to ratio 0.2
+(CLUSTER_SUBDIVISIONS, CLUSTER_DENSITY_ORDER, CLUSTER_REFINEMENT): the correction to the
+assembled resistance is
+
+    dR = [sum of the pairs' resistances - the assembly's own resistance of the cluster alone] + R_3,
+
+and the holding loads of the flow (f = R u) alike; ``pairwise.py`` adds it with the films, in one
+Woodbury update (``close_pairs.with_resistance``). Three 5 um cells in a line at the rolling height,
+each part from the k = 4 sphere with the biquadratic density at ratio 0.35 (pairs and system solved
+directly), against that system's solve (grand mobility / flow's motion; ``benchmarks/many_cells.py
+--parts clusters``): the pairwise resistance alone errs by 3.3e-2 / 7.2e-2 at 0.2 um between the
+surfaces; with R_3 of the cluster mesh 2.2e-5 / 1.3e-5 (0.5 um: 2.0e-5 / 1.4e-5, 7 s a cluster
+solve). Taken in mobility from the same mesh it errs by 3.4e-2 at 0.2 um.
+
+R_3 is a snapshot keyed by the cluster's meshes and its cells' positions relative to its first,
+snapped along the wall to CLUSTER_LATERAL and in height to the pair lattice (``reuse_interaction``):
+moving the middle cell of a train by 50 nm changes the result by 1e-5, raising the cells by 25 nm
+by 6e-4 of the flow's motion. A snapped cluster that is not a valid placement is solved where it
+is, not kept.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections import OrderedDict
+from dataclasses import replace
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from ..hydro.mobility import ContactResolutionWarning
+from ..surfaces.body import Body
+from ..surfaces.mesh import sphere
+from ..surfaces.placement import PlacementError, check_placement
+from .model import Model, build_solver
+
+# the cluster mesh (module docstring): the k = 3 sphere, biquadratic density, refined at contact
+# to 0.2 (at 0.2 um between 5 um cells: ratio 0 errs by 2.6e-4 / 1.1e-4 and moves by 6e-4 when a
+# cell moves 50 nm; k = 2 at 0.35 by 6e-5 / 1.1e-4 in 16 s; the bilinear k = 4 unrefined by 2.0e-3)
+CLUSTER_SUBDIVISIONS = 3
+CLUSTER_DENSITY_ORDER = 3
+CLUSTER_REFINEMENT = 0.2
+# m: the lateral lattice of the clusters' positions (module docstring: 50 nm moved it by 1e-5)
+CLUSTER_LATERAL = 100e-9
+MAX_CLUSTERS = 64  # kept cluster snapshots
+SMALLEST_CLUSTER = 3  # two close cells are their pair snapshot already
+
+
+def clusters(first, second, n: int) -> list[np.ndarray]:
+    """The cells joined by the close pairs (first[p], second[p]) of n cells, SMALLEST_CLUSTER or
+    more each, each in ascending order."""
+    if len(first) == 0:
+        return []
+    graph = coo_matrix((np.ones(len(first)), (first, second)), shape=(n, n))
+    count, label = connected_components(graph, directed=False)
+    found = [np.flatnonzero(label == c) for c in range(count)]
+    return [cells for cells in found if len(cells) >= SMALLEST_CLUSTER]
+
+
+def pairwise_resistance(alone, pairs):
+    """(R, f) of m cells, the sum of each cell's resistance and holding loads alone and each
+    pair's less its cells' alone: ``alone`` [(Q (6, 6), u (6,))] per cell and ``pairs`` {(i, j):
+    (Q (12, 12), u (12,), film L (12, 12) or None)}, mobilities and the flow's motion in the
+    snapshots' generalised coordinates (close_pairs.snapshot_matrices), a pair's Q smooth when
+    its film is given."""
+    m = len(alone)
+    r, f = np.zeros((6 * m, 6 * m)), np.zeros(6 * m)
+    own = [np.linalg.inv(q) for q, _ in alone]
+    for i, ((_, u), r_i) in enumerate(zip(alone, own)):
+        r[6 * i:6 * i + 6, 6 * i:6 * i + 6] += r_i
+        f[6 * i:6 * i + 6] += r_i @ u
+    for (i, j), (q, u, film) in pairs.items():
+        rows = np.concatenate([np.arange(6 * i, 6 * i + 6), np.arange(6 * j, 6 * j + 6)])
+        pair = np.linalg.inv(q)
+        f[rows] += pair @ u - np.concatenate([own[i] @ alone[i][1], own[j] @ alone[j][1]])
+        if film is not None:
+            pair = pair + film
+        pair[:6, :6] -= own[i]
+        pair[6:, 6:] -= own[j]
+        r[np.ix_(rows, rows)] += pair
+    return r, f
+
+
+class CloseClusters:
+    """The three-body part R_3 (module docstring) of ``hydro``'s close clusters: ``part(bodies,
+    cells)`` gives it in the cells' generalised coordinates, solved on the cluster mesh or kept."""
+
+    def __init__(self, hydro):
+        model = hydro.model
+        radii = model.outer_radii
+        meshes = {r: sphere(r, CLUSTER_SUBDIVISIONS) for r in np.unique(radii)}
+        options = replace(model.solver.without_accuracy(), grand_mobility="system", many_body="none",
+                          density_order=CLUSTER_DENSITY_ORDER, quadrature_order=None,
+                          contact_refinement=CLUSTER_REFINEMENT)
+        self.radii = radii
+        self.meshes = [meshes[r] for r in radii]
+        self.heights = hydro.interaction
+        self.model_of = {}  # cluster size -> the cluster mesh's solves of that many cells
+        self._options, self._flow, self._device = options, model.flow, hydro.mobility.device
+        self._solves_type = type(hydro)
+        self._kept: OrderedDict = OrderedDict()
+        self.solved = 0  # cluster snapshots solved (not taken from the kept ones)
+
+    def correction(self, bodies, cells, own, shared, pairs) -> tuple[np.ndarray, np.ndarray]:
+        """(dR (6m, 6m), df (6m,)) of the cluster ``cells`` (m model indices) of ``bodies``
+        (module docstring): ``own`` and ``shared`` [(Q, u)] per cell, its lone snapshot at its
+        own height and at the pair lattice's; ``pairs`` {(k, l): (Q, u, film or None)} of the
+        cluster's near pairs (local indices, k < l), each the pair's snapshot at the pair lattice's
+        heights (its smooth part where it has a film), all generalised (close_pairs.generalised_matrices)."""
+        m = len(cells)
+        assembled = np.zeros((6 * m, 6 * m))  # the assembly's own mobility of the cluster alone (pairwise.py)
+        flow = np.concatenate([u for _, u in own])
+        films = np.zeros((6 * m, 6 * m))
+        each_pair = {}  # each pair's snapshot with its cells moved to their own heights
+        for k, (q, _) in enumerate(own):
+            assembled[6 * k:6 * k + 6, 6 * k:6 * k + 6] = q
+        for (k, l), (q, u, film) in pairs.items():
+            rows = np.concatenate([np.arange(6 * k, 6 * k + 6), np.arange(6 * l, 6 * l + 6)])
+            lone_q = np.zeros((12, 12))
+            lone_q[:6, :6], lone_q[6:, 6:] = shared[k][0], shared[l][0]
+            lone_u = np.concatenate([shared[k][1], shared[l][1]])
+            assembled[np.ix_(rows, rows)] += q - lone_q
+            flow[rows] += u - lone_u
+            own_q = np.zeros((12, 12))
+            own_q[:6, :6], own_q[6:, 6:] = own[k][0], own[l][0]
+            each_pair[k, l] = (q - lone_q + own_q, u - lone_u + np.concatenate([own[k][1], own[l][1]]), film)
+            if film is not None:
+                films[np.ix_(rows, rows)] += film
+        model = np.linalg.inv(assembled)
+        summed, loads = pairwise_resistance(own, each_pair)
+        three_body, three_body_loads = self.part(bodies, cells)
+        return summed - (model + films) + three_body, loads - model @ flow + three_body_loads
+
+    def part(self, bodies, cells) -> tuple[np.ndarray, np.ndarray]:
+        """(R_3 (6m, 6m), its holding loads (6m,)) of the cluster ``cells`` (m model indices) of
+        ``bodies``, at the cells' positions snapped (module docstring)."""
+        positions = np.array([bodies[c].position for c in cells])
+        lateral = np.round((positions[:, :2] - positions[0, :2]) / CLUSTER_LATERAL).astype(int)
+        heights = np.round(positions[:, 2] / self.heights).astype(int)
+        key = tuple(self.radii[cells].tolist()) + tuple(np.column_stack([lateral, heights]).ravel().tolist())
+        if key in self._kept:
+            self._kept.move_to_end(key)
+            return self._kept[key]
+        snapped = np.column_stack([lateral * CLUSTER_LATERAL, heights * self.heights])
+        try:
+            check_placement([Body(self.meshes[c], position=p) for c, p in zip(cells, snapped)],
+                            self._flow.wall)
+        except PlacementError:  # too close for the lattice: solved where the cells are, not kept
+            return self._solved(cells, positions - np.append(positions[0, :2], 0.0))
+        self._kept[key] = self._solved(cells, snapped)
+        self.solved += 1
+        while len(self._kept) > MAX_CLUSTERS:
+            self._kept.popitem(last=False)
+        return self._kept[key]
+
+    def _solved(self, cells, positions):
+        """R_3 of the cluster mesh's cells at ``positions``: its whole system's resistance and
+        holding loads less their pairwise sum, each part solved directly."""
+        m = len(cells)
+        bodies = [Body(self.meshes[c], position=p) for c, p in zip(cells, positions)]
+        radii = self.radii[cells]
+        with warnings.catch_warnings():  # the cluster mesh is refined at contact; its wall gaps cancel in R_3
+            warnings.simplefilter("ignore", ContactResolutionWarning)
+            q, u = self._matrices(bodies, radii)
+            alone = [self._matrices([b], radii[[i]]) for i, b in enumerate(bodies)]
+            pairs = {(i, j): self._matrices([bodies[i], bodies[j]], radii[[i, j]]) + (None,)
+                     for i in range(m) for j in range(i + 1, m)}
+        system = np.linalg.inv(q)
+        summed, loads = pairwise_resistance(alone, pairs)
+        return system - summed, system @ u - loads
+
+    def _matrices(self, bodies, radii):
+        """(Q, u) of ``bodies`` on the cluster mesh solved directly, generalised by their ``radii``."""
+        m = len(bodies)
+        if m not in self.model_of:
+            model = Model([b.mesh for b in bodies], [False] * m, self._flow, solver=self._options)
+            self.model_of[m] = self._solves_type(model, build_solver(model.solver, model.flow, self._device))
+        flow, grand = self.model_of[m]._solved(bodies, radii)
+        return grand.quadratic(), np.concatenate([flow.velocity, flow.angular_velocity * radii[:, None]], axis=1).ravel()
