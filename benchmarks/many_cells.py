@@ -44,6 +44,12 @@
    two-body solve; along the flow, against the direct solve on the k + 1 sphere with the
    biquadratic density (REFERENCE_DENSITY), beside the model built on that discretisation (the model's
    own error) and the k sphere's direct solve (the discretisation's);
+1c''. train: three cells in a line along the flow 0.2-2 um apart between their surfaces at the
+   rolling height, on the pairs (close pairs and their films) without and with the close
+   clusters' three-body part (``close_clusters``, dynamics/close_clusters.py), each built on the
+   k + 1 sphere with REFERENCE_DENSITY, against that discretisation's direct solve of the three
+   (the model's own error), and the pairs with the clusters on the k sphere (time-stepped
+   defaults) against it too; wall times, the clusters' solves included;
 1d. reuse: the pair lattice points a run's frames visit (``--runs RUN.h5 ...``, runs of free
    spherical cells on pairs): the interpolation's four around each pair's offset on the lattice
    that grows as distance^(5/2) from 250 nm (the pairs' rule), against the nearest point of the
@@ -68,7 +74,7 @@
    Cholesky (O(p^3), before it), interleaved cell count by cell count.
 
     python benchmarks/many_cells.py
-        [--parts accuracy resistance cutoff far close lattice reuse factors batch cost implicit]
+        [--parts accuracy resistance cutoff far close train lattice reuse factors batch cost implicit]
         [--runs RUN.h5 ...] [--quick]
         [--cells N ...] [--system-cells N ...] [--remainder-cells N ...] [--cases KIND:N:UM ...]
         [--refinement R] [--solver-paths] [--device cuda:0]
@@ -656,11 +662,38 @@ def close_error(device, cases, k, reference_k, reference_gaps, lattice_from):
     return rows
 
 
+def train_error(device, gaps, k):
+    """Part 1c'': three cells in a line ``gaps`` (m) apart between their surfaces (module
+    docstring); the reference on the k + 1 sphere with REFERENCE_DENSITY."""
+    mesh, fine = wb.mesh.sphere(A, k), wb.mesh.sphere(A, k + 1)
+    pairs = dict(EXACT, grand_mobility="pairs", far_field="none")
+    rows, progress = [], Progress(len(gaps))
+    for gap in gaps:
+        positions = arrangement("line", 3, 2 * A + gap)
+        row = dict(cells=3, gap_um=gap * 1e6, k=k, reference_k=k + 1)
+        fine_bodies = [Body(fine, position=p) for p in positions]
+        t = time.perf_counter()
+        reference = embedded(solves(fine, 3, device, **REFERENCE_DENSITY), fine_bodies, [0, 1, 2], 3)
+        row["reference_s"] = time.perf_counter() - t
+        for name, cells, options in (("own_pairs", fine_bodies, dict(pairs, **REFERENCE_DENSITY, close_clusters="none")),
+                                     ("own_clusters", fine_bodies, dict(pairs, **REFERENCE_DENSITY)),
+                                     ("clusters", [Body(mesh, position=p) for p in positions], pairs)):
+            hydro = solves(cells[0].mesh, 3, device, **options)
+            t = time.perf_counter()
+            got = motion(*hydro._snapshot(cells))
+            row[f"{name}_s"] = time.perf_counter() - t
+            row[f"{name}_grand"], row[f"{name}_flow"] = change(got, reference)
+        rows.append(row)
+        print_table([row])
+        progress.done(f"train: three cells {gap * 1e6:g} um apart")
+    return rows
+
+
 def main():
     parser = arguments(__doc__)
     parser.add_argument("--parts", nargs="+", default=["accuracy"],
                         choices=["accuracy", "resistance", "cutoff", "lattice", "reuse", "factors", "batch", "cost",
-                                 "implicit", "far", "close"])
+                                 "implicit", "far", "close", "train"])
     parser.add_argument("--runs", nargs="*", default=[], help="run files for --parts reuse")
     parser.add_argument("--k", type=int, default=2, help="sphere mesh subdivisions")
     parser.add_argument("--cells", nargs="*", type=int, default=[],
@@ -709,6 +742,9 @@ def main():
         rows = close_error(args.device, cases, args.k, args.k + 1,
                            [] if args.quick else along, 0.2e-6)
         print(f"wrote {write_csv('many_cells_close.csv', rows)}")
+    if "train" in args.parts:
+        rows = train_error(args.device, [0.5e-6] if args.quick else [0.2e-6, 0.5e-6, 1e-6, 2e-6], args.k)
+        print(f"wrote {write_csv('many_cells_train.csv', rows)}")
     if "reuse" in args.parts:
         rows, progress = [], Progress(len(args.runs))
         for path in args.runs:

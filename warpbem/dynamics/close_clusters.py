@@ -59,9 +59,12 @@ from .model import Model, build_solver
 CLUSTER_SUBDIVISIONS = 3
 CLUSTER_DENSITY_ORDER = 3
 CLUSTER_REFINEMENT = 0.2
-# m: the lateral lattice of the clusters' positions (module docstring: 50 nm moved it by 1e-5)
-CLUSTER_LATERAL = 100e-9
+# m: the lateral lattice of the clusters' positions (module docstring: moving a cell by 50 nm moved
+# R_3 by 1e-5; benchmarks/many_cells.py --parts train at 0.35 um is 100 nm off it)
+CLUSTER_LATERAL = 250e-9
 MAX_CLUSTERS = 64  # kept cluster snapshots
+MAX_PIECES = 256  # kept solves of a cluster's cells alone and its pairs
+PIECE_ROUND_OFF = 1e-12  # m: positions this close are one piece's
 SMALLEST_CLUSTER = 3  # two close cells are their pair snapshot already
 
 
@@ -118,6 +121,7 @@ class CloseClusters:
         self._options, self._flow, self._device = options, model.flow, hydro.mobility.device
         self._solves_type = type(hydro)
         self._kept: OrderedDict = OrderedDict()
+        self._pieces: OrderedDict = OrderedDict()  # (radii, relative positions) -> (Q, u) of a cell or pair
         self.solved = 0  # cluster snapshots solved (not taken from the kept ones)
 
     def correction(self, bodies, cells, own, shared, pairs) -> tuple[np.ndarray, np.ndarray]:
@@ -181,12 +185,25 @@ class CloseClusters:
         with warnings.catch_warnings():  # the cluster mesh is refined at contact; its wall gaps cancel in R_3
             warnings.simplefilter("ignore", ContactResolutionWarning)
             q, u = self._matrices(bodies, radii)
-            alone = [self._matrices([b], radii[[i]]) for i, b in enumerate(bodies)]
-            pairs = {(i, j): self._matrices([bodies[i], bodies[j]], radii[[i, j]]) + (None,)
-                     for i in range(m) for j in range(i + 1, m)}
+            alone = [self._piece(bodies, radii, [i]) for i in range(m)]
+            pairs = {(i, j): self._piece(bodies, radii, [i, j]) + (None,) for i in range(m) for j in range(i + 1, m)}
         system = np.linalg.inv(q)
         summed, loads = pairwise_resistance(alone, pairs)
         return system - summed, system @ u - loads
+
+    def _piece(self, bodies, radii, cells):
+        """(Q, u) of the ``cells`` of ``bodies`` alone (a cell or a pair of the cluster), kept by
+        their radii and positions relative to the first: a cluster that changes one gap keeps
+        its other pairs and its cells alone."""
+        positions = np.array([bodies[c].position for c in cells])
+        relative = np.column_stack([positions[:, :2] - positions[0, :2], positions[:, 2]])
+        key = tuple(radii[cells].tolist()) + tuple(np.round(relative / PIECE_ROUND_OFF).astype(int).ravel().tolist())
+        if key not in self._pieces:
+            self._pieces[key] = self._matrices([bodies[c] for c in cells], radii[cells])
+            while len(self._pieces) > MAX_PIECES:
+                self._pieces.popitem(last=False)
+        self._pieces.move_to_end(key)
+        return self._pieces[key]
 
     def _matrices(self, bodies, radii):
         """(Q, u) of ``bodies`` on the cluster mesh solved directly, generalised by their ``radii``."""

@@ -54,7 +54,7 @@ Three 5 um k = 3 cells in a line at the rolling height, against their whole syst
 --cases line:3:10.5 line:3:11 line:3:12``): 0.5 um between the surfaces 1.1e-2 / 1.9e-2 (the
 mobilities summed without films: 0.11 / 3.7e-2), 1 um 1.6e-2 / 1.8e-2 (6.6e-2 / 3.0e-2), 2 um
 2.5e-2 / 1.8e-2 (3.6e-2 / 2.1e-2). What is left is the three-body part of the smooth rest, the
-middle cell screening the outer two.
+middle cell screening the outer two, which ``close_clusters.py`` adds in resistance.
 
 Pairs of cells farther apart than CLOSE_GAP_SHARE radii between their surfaces, or of different
 radii, take the pairs' lateral lattice (``pairwise.py``).

@@ -18,11 +18,12 @@ cell's answer to the flow of the two. Side by side with the whole-system solve
 the grand mobility and 9.3e-4 in the motion in the flow on three cells 25 um apart in a line,
 by 1.6e-3 and 7.5e-3 in a 3 x 3 patch 25 um apart (the middle cell shielded by eight
 neighbours; 1.7e-3 and 1.2e-2 in a 4 x 4 one), and by 3.5e-2 at 12 um in a line (2 um between
-the surfaces, where the middle cell screens the outer two). So the pairs serve lines and sparse
-patches of cells tens of micrometres apart, and the whole system's snapshot close trains (the
-default). The part left out, taken from a coarse mesh's whole system (24-element cells), cuts
-the 4 x 4 patch's errors to 1.3e-4 and 1.7e-3 (``[solver] many_body = "coarse"``,
-``many_body.py``, added to the assembly here).
+the surfaces, where the middle cell screens the outer two). In a close train that part is
+taken in resistance from the cluster's own solve on a coarser discretisation (``[solver]
+close_clusters``, ``close_clusters.py``, added with the films). In a patch, the part left out,
+taken from a coarse mesh's whole system (24-element cells), cuts the 4 x 4 patch's errors to
+1.3e-4 and 1.7e-3 (``[solver] many_body = "coarse"``, ``many_body.py``, added to the assembly
+here).
 
 A pair above the wall in shear is invariant under translation along the wall, so its snapshot
 is computed with its first cell at x = y = 0 and shared by every pair of cells of the same
