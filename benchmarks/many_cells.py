@@ -5,8 +5,8 @@
    ``benchmarks/adhesion.py`` part 2c (largest change over largest entry), from
    - the pairs (``[solver] grand_mobility = "pairs"``, dynamics/pairwise.py) at the cells' own
      positions, every pair from its snapshot ("pairwise": the approximation alone, close pairs
-     with their films added in resistance; "pairwise_no_films": every pair's mobility summed,
-     ``close_pairs = "lattice"``), the pairs
+     with their films added in resistance and no close clusters' part; "pairwise_no_films":
+     every pair's mobility summed, ``close_pairs = "lattice"``), the pairs
      beyond the near radius from the far field ("pairs_far", dynamics/far_field.py: the
      solver's default), and on the default lattices ("pairs_lattices");
    - the pairs with ``[solver] many_body = "coarse"`` (dynamics/many_body.py) at the cells' own
@@ -216,7 +216,8 @@ def accuracy(device, cases, k, refinement=None, extras=True):
         row = dict(arrangement=kind, cells=n, spacing_um=spacing * 1e6, k=k,
                    refinement=hydro.model.solver.contact_refinement, system_s=t_system)
         approximations = {}
-        for name, options in (("pairwise", dict(EXACT, grand_mobility="pairs", far_field="none")),
+        for name, options in (("pairwise", dict(EXACT, grand_mobility="pairs", far_field="none",
+                                                close_clusters="none")),
                               ("pairwise_no_films", dict(EXACT, grand_mobility="pairs", far_field="none",
                                                          close_pairs="lattice")),
                               ("pairs_far", dict(EXACT, grand_mobility="pairs")),
@@ -675,8 +676,9 @@ def train_error(device, gaps, k):
         t = time.perf_counter()
         reference = embedded(solves(fine, 3, device, **REFERENCE_DENSITY), fine_bodies, [0, 1, 2], 3)
         row["reference_s"] = time.perf_counter() - t
-        for name, cells, options in (("own_pairs", fine_bodies, dict(pairs, **REFERENCE_DENSITY, close_clusters="none")),
-                                     ("own_clusters", fine_bodies, dict(pairs, **REFERENCE_DENSITY)),
+        own = dict(pairs, **REFERENCE_DENSITY)
+        for name, cells, options in (("own_pairs", fine_bodies, dict(own, close_clusters="none")),
+                                     ("own_clusters", fine_bodies, own),
                                      ("clusters", [Body(mesh, position=p) for p in positions], pairs)):
             hydro = solves(cells[0].mesh, 3, device, **options)
             t = time.perf_counter()
@@ -743,7 +745,7 @@ def main():
                            [] if args.quick else along, 0.2e-6)
         print(f"wrote {write_csv('many_cells_close.csv', rows)}")
     if "train" in args.parts:
-        rows = train_error(args.device, [0.5e-6] if args.quick else [0.2e-6, 0.5e-6, 1e-6, 2e-6], args.k)
+        rows = train_error(args.device, [0.5e-6] if args.quick else [0.2e-6, 0.35e-6, 0.5e-6, 1e-6, 2e-6], args.k)
         print(f"wrote {write_csv('many_cells_train.csv', rows)}")
     if "reuse" in args.parts:
         rows, progress = [], Progress(len(args.runs))

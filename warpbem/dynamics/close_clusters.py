@@ -3,12 +3,12 @@
 
 In a train of cells near contact the middle cell screens the outer two, a three-body part that
 neither the pairs (``pairwise.py``) nor their films (``close_pairs.py``) hold: three 5 um cells in a
-line 0.5-2 um apart err by 1.1e-2-2.5e-2 in the grand mobility on the pairs with their films.
-Added in mobility, as the many-body remainder of ``many_body.py`` does, the part is not smooth: a
-whole system's mobility near contact holds its films, which a coarse mesh does not resolve and
-the pairs of that mesh cancel only to first order. In resistance the films are pairwise (they
-are local to each gap, Durlofsky, Brady & Bossis 1987, J. Fluid Mech. 180:21), so the three-body
-part
+line 0.2-2 um apart err by 1.2e-2-2.6e-2 in the grand mobility on the pairs with their films.
+Added in mobility, as the many-body remainder of ``many_body.py`` is, it does not converge near
+contact: the films of a train do not add in mobility, so the difference of a coarse whole system
+and its coarse pairs holds what the coarse mesh makes of each film. In resistance the films are
+pairwise (local to each gap; Durlofsky, Brady & Bossis 1987, J. Fluid Mech. 180:21), so the
+three-body part
 
     R_3 = R_system - sum_i R_i - sum_{pairs (i, j)} [R_ij - R_i - R_j],
 
@@ -23,18 +23,22 @@ assembled resistance is
     dR = [sum of the pairs' resistances - the assembly's own resistance of the cluster alone] + R_3,
 
 and the holding loads of the flow (f = R u) alike; ``pairwise.py`` adds it with the films, in one
-Woodbury update (``close_pairs.with_resistance``). Three 5 um cells in a line at the rolling height,
-each part from the k = 4 sphere with the biquadratic density at ratio 0.35 (pairs and system solved
-directly), against that system's solve (grand mobility / flow's motion; ``benchmarks/many_cells.py
---parts clusters``): the pairwise resistance alone errs by 3.3e-2 / 7.2e-2 at 0.2 um between the
-surfaces; with R_3 of the cluster mesh 2.2e-5 / 1.3e-5 (0.5 um: 2.0e-5 / 1.4e-5, 7 s a cluster
-solve). Taken in mobility from the same mesh it errs by 3.4e-2 at 0.2 um.
+Woodbury update (``close_pairs.with_resistance``). Three 5 um cells in a line at the rolling
+height, built on the k = 4 sphere with the biquadratic density at ratio 0.35, against that
+discretisation's direct solve of the three (grand mobility / flow's motion;
+``benchmarks/many_cells.py --parts train --k 3``): on the pairs with their films 1.5e-2 / 2.1e-2
+at 0.2 um between the surfaces and 1.2e-2-2.6e-2 / 1.8e-2-2.0e-2 at 0.35-2 um; with R_3 3.9e-4 /
+5.9e-4 at 0.2 um (a cell 50 nm off the cluster lattice), 2.0e-4 / 3.1e-4 at 0.35 um (100 nm off)
+and 1.6e-5 / 1.5e-5 or less from 0.5 um. The cluster mesh's solve of three cells and their new
+pairs takes 2-6 s (the difference of the benchmark's two times). Taken in mobility from coarse
+cells, as ``many_body.py`` takes its remainder, the same three cells 0.5 um apart on the k = 3
+sphere stay 1.9e-2 from their whole system (``--parts accuracy``, "pairs_remainder").
 
 R_3 is a snapshot keyed by the cluster's meshes and its cells' positions relative to its first,
 snapped along the wall to CLUSTER_LATERAL and in height to the pair lattice (``reuse_interaction``):
-moving the middle cell of a train by 50 nm changes the result by 1e-5, raising the cells by 25 nm
-by 6e-4 of the flow's motion. A snapped cluster that is not a valid placement is solved where it
-is, not kept.
+moving the middle cell of a train 0.2 um apart by 50 nm changed the result by 1e-5, raising all
+three by 25 nm by 6e-4 of the flow's motion (a script beside ``--parts train``). A snapped
+cluster that is not a valid placement is solved where it is, not kept.
 """
 
 from __future__ import annotations
@@ -54,8 +58,11 @@ from ..surfaces.placement import PlacementError, check_placement
 from .model import Model, build_solver
 
 # the cluster mesh (module docstring): the k = 3 sphere, biquadratic density, refined at contact
-# to 0.2 (at 0.2 um between 5 um cells: ratio 0 errs by 2.6e-4 / 1.1e-4 and moves by 6e-4 when a
-# cell moves 50 nm; k = 2 at 0.35 by 6e-5 / 1.1e-4 in 16 s; the bilinear k = 4 unrefined by 2.0e-3)
+# to 0.2. R_3 from other meshes, added to the k = 4 biquadratic pairs of three cells 0.2 um apart,
+# against their direct solve (a script beside benchmarks/many_cells.py --parts train): this one
+# 2.2e-5 / 1.3e-5 of the grand mobility / flow's motion (7 s); unrefined 2.6e-4 / 1.1e-4, moving by
+# 6e-4 when a cell moves 50 nm (5 s); k = 2 at 0.35 6e-5 / 1.1e-4 (16 s); the bilinear k = 4
+# unrefined 2.0e-3 / 1.7e-3, the bilinear k = 3 at ratio 1 1.7e-3 / 1.5e-3
 CLUSTER_SUBDIVISIONS = 3
 CLUSTER_DENSITY_ORDER = 3
 CLUSTER_REFINEMENT = 0.2
@@ -111,13 +118,14 @@ class CloseClusters:
         model = hydro.model
         radii = model.outer_radii
         meshes = {r: sphere(r, CLUSTER_SUBDIVISIONS) for r in np.unique(radii)}
+        # solved directly, never from snapshots (so not from the disk store either)
         options = replace(model.solver.without_accuracy(), grand_mobility="system", many_body="none",
                           density_order=CLUSTER_DENSITY_ORDER, quadrature_order=None,
-                          contact_refinement=CLUSTER_REFINEMENT)
+                          contact_refinement=CLUSTER_REFINEMENT, snapshot_store="off")
         self.radii = radii
         self.meshes = [meshes[r] for r in radii]
         self.heights = hydro.interaction
-        self.model_of = {}  # cluster size -> the cluster mesh's solves of that many cells
+        self._solves_of = {}  # the cells' radii -> the cluster mesh's solves of those cells
         self._options, self._flow, self._device = options, model.flow, hydro.mobility.device
         self._solves_type = type(hydro)
         self._kept: OrderedDict = OrderedDict()
@@ -207,9 +215,10 @@ class CloseClusters:
 
     def _matrices(self, bodies, radii):
         """(Q, u) of ``bodies`` on the cluster mesh solved directly, generalised by their ``radii``."""
-        m = len(bodies)
-        if m not in self.model_of:
-            model = Model([b.mesh for b in bodies], [False] * m, self._flow, solver=self._options)
-            self.model_of[m] = self._solves_type(model, build_solver(model.solver, model.flow, self._device))
-        flow, grand = self.model_of[m]._solved(bodies, radii)
-        return grand.quadratic(), np.concatenate([flow.velocity, flow.angular_velocity * radii[:, None]], axis=1).ravel()
+        key = tuple(radii.tolist())
+        if key not in self._solves_of:
+            model = Model([b.mesh for b in bodies], [False] * len(bodies), self._flow, solver=self._options)
+            self._solves_of[key] = self._solves_type(model, build_solver(model.solver, model.flow, self._device))
+        flow, grand = self._solves_of[key]._solved(bodies, radii)
+        flow_motion = np.concatenate([flow.velocity, flow.angular_velocity * radii[:, None]], axis=1)
+        return grand.quadratic(), flow_motion.ravel()

@@ -213,8 +213,8 @@ class SolverOptions:
                                         " pairs: 'resistance' adds the part their pairs leave out (the middle cell"
                                         " screening the outer ones) in resistance, from the cluster solved on the"
                                         " k = 3 sphere with the biquadratic density less its pairs: three cells in a"
-                                        " line 0.2 um apart 2.2e-5 / 1.3e-5 of the grand mobility / flow's motion"
-                                        " against 3.3e-2 / 7.2e-2 without it (dynamics/close_clusters.py); 'none'"
+                                        " line 0.2 um apart 3.9e-4 / 5.9e-4 of the grand mobility / flow's motion"
+                                        " against 1.5e-2 / 2.1e-2 without it (dynamics/close_clusters.py); 'none'"
                                         " leaves it out. Default: 'resistance' with many_body = 'none', else 'none'"
                                         " (the coarse remainder holds a three-body part of its own)",
                                         kind=str, choices=CLOSE_CLUSTERS)
@@ -279,8 +279,8 @@ class SolverOptions:
         order = self.density_order or (TIME_STEPPING_DENSITY_ORDER if time_stepping else SOLVE_DENSITY_ORDER)
         refinement = DEFAULT_CONTACT_REFINEMENT[order] if self.contact_refinement is None else self.contact_refinement
         return dataclasses.replace(self, density_order=order, contact_refinement=refinement, tolerance=tolerance,
-                                   reuse_tolerance=reuse, quadrature_order=self.quadrature_order or QUADRATURE_ORDER[order],
-                                   close_clusters=clusters)
+                                   reuse_tolerance=reuse, close_clusters=clusters,
+                                   quadrature_order=self.quadrature_order or QUADRATURE_ORDER[order])
 
     def without_accuracy(self) -> "SolverOptions":
         """These options with no accuracy target, for the solves it does not cover (the traction,
