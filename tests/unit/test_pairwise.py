@@ -216,16 +216,19 @@ mesh = { shape = "sphere", radius = 2.0e-6, subdivisions = 2 }
 @pytest.mark.filterwarnings("ignore::warpbem.ContactResolutionWarning")
 @pytest.mark.parametrize("count, pitch, many_body", [((2, 1), (10e-6, 0.0), "none"), ((2, 1), (4.6e-6, 0.0), "none"),
                                                      ((4, 4), (10e-6, 10e-6), "none"),
-                                                     ((3, 1), (10e-6, 0.0), "coarse")],
-                         ids=["two cells", "two close cells", "a 4 x 4 patch", "three in a line with the remainder"])
-def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_path, count, pitch, many_body):
-    """Adhesive cells on pair snapshots (two, two near contact, sixteen in a patch, and three in a
-    line with the many-body remainder): a run killed after 2 frames and resumed forms the same bonds and ends
-    within 1e-9 radii of where the uninterrupted one ends (as one cell's, test_adhesion.py: its solves
-    start GMRES from another previous solution); for two cells a second run with the same seed
-    also repeats the first bit for bit (the pairs' part is a function of the state alone: the
-    lattice points' snapshots and their weights, so which snapshots a run happens to keep changes
-    no number; the remainder's likewise, many_body.py)."""
+                                                     ((3, 1), (10e-6, 0.0), "coarse"), ((3, 1), (4.6e-6, 0.0), "none")],
+                         ids=["two cells", "two close cells", "a 4 x 4 patch", "three in a line with the remainder",
+                              "three close cells"])
+def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_path, monkeypatch, count, pitch,
+                                                                          many_body):
+    """Adhesive cells on pair snapshots (two, two near contact, sixteen in a patch, three in a
+    line with the many-body remainder, and three near contact, a close cluster): a run killed
+    after 2 frames and resumed forms the same bonds and ends within 1e-9 radii of where the
+    uninterrupted one ends (as one cell's, test_adhesion.py: its solves start GMRES from another
+    previous solution); for two cells and the close cluster a second run with the same seed also
+    repeats the first bit for bit (the pairs' part is a function of the state alone: the lattice
+    points' snapshots and their weights, so which snapshots a run happens to keep changes no
+    number; the remainder's likewise, many_body.py, and the cluster's, close_clusters.py)."""
     from warpbem.app import run
 
     path = tmp_path / "pairs.toml"
@@ -240,8 +243,15 @@ def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_pa
             'grand_mobility = "pairs"',
             'grand_mobility = "pairs"\npair_lateral = 2.0e-6\nnear_radius = 1.2e-5\nreuse_interaction = 2.0e-7')
     path.write_text(scene)
+    from warpbem.dynamics.close_clusters import CloseClusters
+
+    clusters_taken = []
+    part = CloseClusters.part
+    monkeypatch.setattr(CloseClusters, "part", lambda self, *a: clusters_taken.append(a) or part(self, *a))
     run.run(path, tmp_path / "straight.h5", progress=lambda line: None)
-    if count == (2, 1):  # the same seed's rerun on two cells (the kept rows are tested bit for bit above)
+    assert bool(clusters_taken) == (count == (3, 1) and pitch[0] < 3 * A)  # three close cells are a cluster
+    repeated = count == (2, 1) or pitch[0] < 3 * A  # the kept rows are tested bit for bit above
+    if repeated:  # the same seed's rerun
         run.run(path, tmp_path / "again.h5", progress=lambda line: None)
     run_killed_after(2, path, tmp_path / "killed.h5")
     run.run(None, tmp_path / "killed.h5", resume=True, progress=lambda line: None)
@@ -252,7 +262,7 @@ def test_a_resumed_run_of_cells_in_pairs_reproduces_the_uninterrupted_one(tmp_pa
         assert g["position"].shape[1] == count[0] * count[1]
         bound = g["bond_count"][:].max(axis=0) > 0
         assert bound.sum() >= 0.75 * bound.size  # most cells bind: their kinetics are compared
-        if count == (2, 1):
+        if repeated:
             with h5py.File(tmp_path / "again.h5") as h:
                 for name in ("position", "velocity", "bond_receptor", "bond_count"):
                     np.testing.assert_array_equal(h[name][:], g[name][:])
