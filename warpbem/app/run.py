@@ -30,6 +30,17 @@ def stored(store) -> str:
     return "" if store is None or not store.hits + store.misses else f" (store {store.hits} read)"
 
 
+def coupling_solves(hydro) -> str:
+    """The progress line's note of the many-body remainders and close clusters solved
+    (``many_body.py``, ``close_clusters.py``), which the snapshots' count leaves out:
+    "  clusters 12"; "" on the whole system's snapshots or with neither."""
+    pairwise = hydro.pairwise
+    if pairwise is None:
+        return ""
+    parts = (("remainders", pairwise.remainder), ("clusters", pairwise.clusters))
+    return "".join(f"  {label} {part.solved}" for label, part in parts if part is not None)
+
+
 def read_state(f, model, row: int) -> State:
     """The state of frame ``row`` of an open run file (``model``: the run's)."""
     parts = {}
@@ -161,7 +172,8 @@ def run(scene, output, overrides=(), device="cpu", resume=False, progress=print,
                 eta = eta_text((scene.end - state.time) / rate) if rate > 0 else "ETA -"
                 report(f"t = {state.time:.6g} / {scene.end:g} s  steps {state.steps}  {steps / elapsed:.2f} steps/s"
                        f"  dt {frame.dt:.2e} s  GMRES {frame.gmres_iterations} ({sim.mobility.operator_description})"
-                       f"  snapshots {sim.hydro.snapshots_solved}{stored(sim.hydro.store)}  {eta}")
+                       f"  snapshots {sim.hydro.snapshots_solved}{stored(sim.hydro.store)}"
+                       f"{coupling_solves(sim.hydro)}  {eta}")
         frames = writer.rows
     report(f"done: {steps} steps, t = {t0:g} -> {state.time:g} s simulated in {time.perf_counter() - start:.1f} s;"
            f" {frames} frames in {output}")
