@@ -49,7 +49,8 @@
    clusters' three-body part (``close_clusters``, dynamics/close_clusters.py), each built on the
    k + 1 sphere with REFERENCE_DENSITY, against that discretisation's direct solve of the three
    (the model's own error), and the pairs with the clusters on the k sphere (time-stepped
-   defaults) against it too; wall times, the clusters' solves included;
+   defaults) against it too; wall times, the clusters' solves included; at 0.2 um, the clusters'
+   part from other cluster meshes, at the cells' own positions and on the cluster lattice;
 1d. reuse: the pair lattice points a run's frames visit (``--runs RUN.h5 ...``, runs of free
    spherical cells on pairs): the interpolation's four around each pair's offset on the lattice
    that grows as distance^(5/2) from 250 nm (the pairs' rule), against the nearest point of the
@@ -97,7 +98,7 @@ import numpy as np
 import warpbem as wb
 from common import arguments, output as output_path, print_table, pyplot, save_chart, write_csv
 from warpbem.app.progress import Progress
-from warpbem.dynamics import implicit
+from warpbem.dynamics import close_clusters, implicit
 from warpbem.dynamics.hydrodynamics import HydrodynamicSolves, Motion
 from warpbem.dynamics.model import Flow, Model, SolverOptions, StepPolicy, build_solver
 from warpbem.dynamics.pairwise import lateral_spacing
@@ -691,6 +692,38 @@ def train_error(device, gaps, k):
     return rows
 
 
+# the cluster meshes --parts train compares at 0.2 um: (subdivisions, density order, contact
+# refinement); the first is close_clusters.py's own
+CLUSTER_MESHES = ((3, 3, 0.2), (3, 3, 0.0), (2, 3, 0.35), (4, 1, 0.0), (3, 1, 1.0))
+
+
+def cluster_mesh_error(device, gap, k):
+    """Part 1c'' continued: three cells ``gap`` (m) apart as ``train_error`` builds them on the
+    k + 1 sphere with REFERENCE_DENSITY, the close clusters' part from each of CLUSTER_MESHES,
+    at the cells' own positions (the cluster lattice below round-off) and on the 250 nm lattice,
+    against the direct solve; wall times of the path (the clusters' solves and, on a fresh
+    snapshot store, the close pairs' lattice)."""
+    fine = wb.mesh.sphere(A, k + 1)
+    positions = arrangement("line", 3, 2 * A + gap)
+    bodies = [Body(fine, position=p) for p in positions]
+    reference = embedded(solves(fine, 3, device, **REFERENCE_DENSITY), bodies, [0, 1, 2], 3)
+    rows, progress = [], Progress(len(CLUSTER_MESHES))
+    for subdivisions, order, ratio in CLUSTER_MESHES:
+        row = dict(gap_um=gap * 1e6, subdivisions=subdivisions, density_order=order, contact_refinement=ratio)
+        for name, lateral in (("exact", 1e-12), ("lattice", close_clusters.CLUSTER_LATERAL)):
+            with mock.patch.multiple(close_clusters, CLUSTER_SUBDIVISIONS=subdivisions, CLUSTER_DENSITY_ORDER=order,
+                                     CLUSTER_REFINEMENT=ratio, CLUSTER_LATERAL=lateral):
+                hydro = solves(fine, 3, device, **EXACT, grand_mobility="pairs", far_field="none", **REFERENCE_DENSITY)
+                t = time.perf_counter()
+                got = motion(*hydro._snapshot(bodies))
+                row[f"{name}_s"] = time.perf_counter() - t
+            row[f"{name}_grand"], row[f"{name}_flow"] = change(got, reference)
+        rows.append(row)
+        print_table([row])
+        progress.done(f"train: the cluster mesh k = {subdivisions}, p = {order}, ratio {ratio:g}")
+    return rows
+
+
 def main():
     parser = arguments(__doc__)
     parser.add_argument("--parts", nargs="+", default=["accuracy"],
@@ -747,6 +780,9 @@ def main():
     if "train" in args.parts:
         rows = train_error(args.device, [0.5e-6] if args.quick else [0.2e-6, 0.35e-6, 0.5e-6, 1e-6, 2e-6], args.k)
         print(f"wrote {write_csv('many_cells_train.csv', rows)}")
+        if not args.quick:
+            rows = cluster_mesh_error(args.device, 0.2e-6, args.k)
+            print(f"wrote {write_csv('many_cells_train_meshes.csv', rows)}")
     if "reuse" in args.parts:
         rows, progress = [], Progress(len(args.runs))
         for path in args.runs:

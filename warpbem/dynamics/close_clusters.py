@@ -36,9 +36,10 @@ sphere stay 1.9e-2 from their whole system (``--parts accuracy``, "pairs_remaind
 
 R_3 is a snapshot keyed by the cluster's meshes and its cells' positions relative to its first,
 snapped along the wall to CLUSTER_LATERAL and in height to the pair lattice (``reuse_interaction``):
-moving the middle cell of a train 0.2 um apart by 50 nm changed the result by 1e-5, raising all
-three by 25 nm by 6e-4 of the flow's motion (a script beside ``--parts train``). A snapped
-cluster that is not a valid placement is solved where it is, not kept.
+on these lattices three cells 0.2 um apart go from 3.7e-4 / 1.3e-4 at their own positions to
+3.9e-4 / 5.9e-4 (``--parts train``), most of it the heights (in a script, moving the middle cell
+by 50 nm along the wall changed R_3's result by 1e-5, raising all three by 25 nm the flow's
+motion by 6e-4). A snapped cluster that is not a valid placement is solved where it is, not kept.
 """
 
 from __future__ import annotations
@@ -58,16 +59,18 @@ from ..surfaces.placement import PlacementError, check_placement
 from .model import Model, build_solver
 
 # the cluster mesh (module docstring): the k = 3 sphere, biquadratic density, refined at contact
-# to 0.2. R_3 from other meshes, added to the k = 4 biquadratic pairs of three cells 0.2 um apart,
-# against their direct solve (a script beside benchmarks/many_cells.py --parts train): this one
-# 2.2e-5 / 1.3e-5 of the grand mobility / flow's motion (7 s); unrefined 2.6e-4 / 1.1e-4, moving by
-# 6e-4 when a cell moves 50 nm (5 s); k = 2 at 0.35 6e-5 / 1.1e-4 (16 s); the bilinear k = 4
-# unrefined 2.0e-3 / 1.7e-3, the bilinear k = 3 at ratio 1 1.7e-3 / 1.5e-3
+# to 0.2. Three k = 4 biquadratic cells 0.2 um apart on their own close pairs, against their direct
+# solve, at their own positions (benchmarks/many_cells.py --parts train, many_cells_train_meshes.csv):
+# this mesh 3.7e-4 / 1.3e-4 of the grand mobility / flow's motion, unrefined 4.0e-4 / 1.4e-4, k = 2
+# at 0.35 3.6e-4 / 2.3e-4 (the close pairs' own error there, 2.3e-4, dominates these three), the
+# bilinear k = 4 unrefined 1.9e-3 / 1.7e-3, the bilinear k = 3 at ratio 1 1.6e-3 / 1.4e-3. With the
+# pairs solved directly instead (a script) the unrefined one gave 2.6e-4 / 1.1e-4, this one
+# 2.2e-5 / 1.3e-5
 CLUSTER_SUBDIVISIONS = 3
 CLUSTER_DENSITY_ORDER = 3
 CLUSTER_REFINEMENT = 0.2
-# m: the lateral lattice of the clusters' positions (module docstring: moving a cell by 50 nm moved
-# R_3 by 1e-5; benchmarks/many_cells.py --parts train at 0.35 um is 100 nm off it)
+# m: the lateral lattice of the clusters' positions (module docstring; with the heights on 20 nm it
+# takes the flow's motion of three cells 0.2 um apart from 1.3e-4 to 5.9e-4, many_cells_train_meshes.csv)
 CLUSTER_LATERAL = 250e-9
 MAX_CLUSTERS = 64  # kept cluster snapshots
 MAX_PIECES = 256  # kept solves of a cluster's cells alone and its pairs
