@@ -664,28 +664,43 @@ def close_error(device, cases, k, reference_k, reference_gaps, lattice_from):
     return rows
 
 
+# the pairs path of --parts train: every lattice below round-off, every pair from its snapshot
+TRAIN_PAIRS = dict(EXACT, grand_mobility="pairs", far_field="none")
+
+
+def train_reference(device, gap, k):
+    """(positions, the cells on the k + 1 sphere, their direct solve with REFERENCE_DENSITY (Q,
+    flow motion), its wall time) of three cells in a line ``gap`` (m) apart between their surfaces."""
+    fine = wb.mesh.sphere(A, k + 1)
+    positions = arrangement("line", 3, 2 * A + gap)
+    bodies = [Body(fine, position=p) for p in positions]
+    t = time.perf_counter()
+    reference = embedded(solves(fine, 3, device, **REFERENCE_DENSITY), bodies, [0, 1, 2], 3)
+    return positions, bodies, reference, time.perf_counter() - t
+
+
+def timed_against(row, name, hydro, bodies, reference):
+    """Put into ``row`` the wall time of ``hydro``'s snapshot of ``bodies`` (``name``_s) and its
+    change from ``reference`` (``name``_grand, ``name``_flow)."""
+    t = time.perf_counter()
+    got = motion(*hydro._snapshot(bodies))
+    row[f"{name}_s"] = time.perf_counter() - t
+    row[f"{name}_grand"], row[f"{name}_flow"] = change(got, reference)
+
+
 def train_error(device, gaps, k):
     """Part 1c'': three cells in a line ``gaps`` (m) apart between their surfaces (module
     docstring); the reference on the k + 1 sphere with REFERENCE_DENSITY."""
-    mesh, fine = wb.mesh.sphere(A, k), wb.mesh.sphere(A, k + 1)
-    pairs = dict(EXACT, grand_mobility="pairs", far_field="none")
+    mesh = wb.mesh.sphere(A, k)
     rows, progress = [], Progress(len(gaps))
     for gap in gaps:
-        positions = arrangement("line", 3, 2 * A + gap)
-        row = dict(cells=3, gap_um=gap * 1e6, k=k, reference_k=k + 1)
-        fine_bodies = [Body(fine, position=p) for p in positions]
-        t = time.perf_counter()
-        reference = embedded(solves(fine, 3, device, **REFERENCE_DENSITY), fine_bodies, [0, 1, 2], 3)
-        row["reference_s"] = time.perf_counter() - t
-        own = dict(pairs, **REFERENCE_DENSITY)
+        positions, fine_bodies, reference, seconds = train_reference(device, gap, k)
+        row = dict(cells=3, gap_um=gap * 1e6, k=k, reference_k=k + 1, reference_s=seconds)
+        own = dict(TRAIN_PAIRS, **REFERENCE_DENSITY)
         for name, cells, options in (("own_pairs", fine_bodies, dict(own, close_clusters="none")),
                                      ("own_clusters", fine_bodies, own),
-                                     ("clusters", [Body(mesh, position=p) for p in positions], pairs)):
-            hydro = solves(cells[0].mesh, 3, device, **options)
-            t = time.perf_counter()
-            got = motion(*hydro._snapshot(cells))
-            row[f"{name}_s"] = time.perf_counter() - t
-            row[f"{name}_grand"], row[f"{name}_flow"] = change(got, reference)
+                                     ("clusters", [Body(mesh, position=p) for p in positions], TRAIN_PAIRS)):
+            timed_against(row, name, solves(cells[0].mesh, 3, device, **options), cells, reference)
         rows.append(row)
         print_table([row])
         progress.done(f"train: three cells {gap * 1e6:g} um apart")
@@ -703,21 +718,15 @@ def cluster_mesh_error(device, gap, k):
     at the cells' own positions (the cluster lattice below round-off) and on the 250 nm lattice,
     against the direct solve; wall times of the path (the clusters' solves and, on a fresh
     snapshot store, the close pairs' lattice)."""
-    fine = wb.mesh.sphere(A, k + 1)
-    positions = arrangement("line", 3, 2 * A + gap)
-    bodies = [Body(fine, position=p) for p in positions]
-    reference = embedded(solves(fine, 3, device, **REFERENCE_DENSITY), bodies, [0, 1, 2], 3)
+    _, bodies, reference, _ = train_reference(device, gap, k)
     rows, progress = [], Progress(len(CLUSTER_MESHES))
     for subdivisions, order, ratio in CLUSTER_MESHES:
         row = dict(gap_um=gap * 1e6, subdivisions=subdivisions, density_order=order, contact_refinement=ratio)
         for name, lateral in (("exact", 1e-12), ("lattice", close_clusters.CLUSTER_LATERAL)):
             with mock.patch.multiple(close_clusters, CLUSTER_SUBDIVISIONS=subdivisions, CLUSTER_DENSITY_ORDER=order,
                                      CLUSTER_REFINEMENT=ratio, CLUSTER_LATERAL=lateral):
-                hydro = solves(fine, 3, device, **EXACT, grand_mobility="pairs", far_field="none", **REFERENCE_DENSITY)
-                t = time.perf_counter()
-                got = motion(*hydro._snapshot(bodies))
-                row[f"{name}_s"] = time.perf_counter() - t
-            row[f"{name}_grand"], row[f"{name}_flow"] = change(got, reference)
+                hydro = solves(bodies[0].mesh, 3, device, **TRAIN_PAIRS, **REFERENCE_DENSITY)
+                timed_against(row, name, hydro, bodies, reference)
         rows.append(row)
         print_table([row])
         progress.done(f"train: the cluster mesh k = {subdivisions}, p = {order}, ratio {ratio:g}")
