@@ -49,6 +49,7 @@ from collections import OrderedDict
 from dataclasses import replace
 
 import numpy as np
+from scipy.linalg import block_diag
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
@@ -56,6 +57,7 @@ from ..hydro.mobility import ContactResolutionWarning
 from ..surfaces.body import Body
 from ..surfaces.mesh import sphere
 from ..surfaces.placement import PlacementError, check_placement
+from .close_pairs import snapshot_matrices
 from .model import Model, build_solver
 
 # the cluster mesh (module docstring): the k = 3 sphere, biquadratic density, refined at contact
@@ -150,14 +152,11 @@ class CloseClusters:
             assembled[6 * k:6 * k + 6, 6 * k:6 * k + 6] = q
         for (k, l), (q, u, film) in pairs.items():
             rows = np.concatenate([np.arange(6 * k, 6 * k + 6), np.arange(6 * l, 6 * l + 6)])
-            lone_q = np.zeros((12, 12))
-            lone_q[:6, :6], lone_q[6:, 6:] = shared[k][0], shared[l][0]
-            lone_u = np.concatenate([shared[k][1], shared[l][1]])
+            lone_q, lone_u = block_diag(shared[k][0], shared[l][0]), np.concatenate([shared[k][1], shared[l][1]])
             assembled[np.ix_(rows, rows)] += q - lone_q
             flow[rows] += u - lone_u
-            own_q = np.zeros((12, 12))
-            own_q[:6, :6], own_q[6:, 6:] = own[k][0], own[l][0]
-            each_pair[k, l] = (q - lone_q + own_q, u - lone_u + np.concatenate([own[k][1], own[l][1]]), film)
+            each_pair[k, l] = (q - lone_q + block_diag(own[k][0], own[l][0]),
+                               u - lone_u + np.concatenate([own[k][1], own[l][1]]), film)
             if film is not None:
                 films[np.ix_(rows, rows)] += film
         model = np.linalg.inv(assembled)
@@ -222,6 +221,4 @@ class CloseClusters:
         if key not in self._solves_of:
             model = Model([b.mesh for b in bodies], [False] * len(bodies), self._flow, solver=self._options)
             self._solves_of[key] = self._solves_type(model, build_solver(model.solver, model.flow, self._device))
-        flow, grand = self._solves_of[key]._solved(bodies, radii)
-        flow_motion = np.concatenate([flow.velocity, flow.angular_velocity * radii[:, None]], axis=1)
-        return grand.quadratic(), flow_motion.ravel()
+        return snapshot_matrices(*self._solves_of[key]._solved(bodies, radii), radii)

@@ -90,11 +90,12 @@ def generalised(matrix: np.ndarray, radius: float) -> np.ndarray:
     return scale[:, None] * matrix * scale[None, :]
 
 
-def snapshot_matrices(flow, grand, radius: float) -> tuple[np.ndarray, np.ndarray]:
-    """(Q (12, 12), u (12,)) of a pair snapshot of two cells of ``radius``: the symmetrised grand
-    mobility, (U, a Omega) of each cell per unit (F, T / a), and the flow's motion (U, a Omega)."""
-    u = np.concatenate([np.concatenate([flow.velocity[c], radius * flow.angular_velocity[c]]) for c in range(2)])
-    return grand.quadratic(), u
+def snapshot_matrices(flow, grand, radii) -> tuple[np.ndarray, np.ndarray]:
+    """(Q (6n, 6n), u (6n,)) of a snapshot of n cells of ``radii`` ((n,) m, or one radius): the
+    symmetrised grand mobility, (U, a Omega) of each cell per unit (F, T / a), and the flow's
+    motion (U, a Omega)."""
+    radii = np.broadcast_to(np.asarray(radii, float), (len(flow.velocity),))
+    return grand.quadratic(), np.concatenate([flow.velocity, flow.angular_velocity * radii[:, None]], axis=1).ravel()
 
 
 def snapshot_parts(q: np.ndarray, u: np.ndarray, radii) -> tuple:
