@@ -14,7 +14,7 @@
    - the pairs at the cells' own positions plus the many-body remainder of a coarse mesh: its
      whole system's solve minus its pairs, the three-body and higher part as that mesh sees it
      (the k = 2 sphere, 24 elements, unrefined and with the contact refinement 0.5 and 1:
-     "remainder_RATIO");
+     "remainder_RATIO"; unrefined with the biquadratic density, the solver's: "remainder_0_p3");
    - each fine cell alone plus the pairs' part of the coarse mesh ("coarse_pairs_RATIO": the
      coupling itself from the coarse pairs, which would make a pair snapshot 20-30 times cheaper);
    - the unrefined remainder from local clusters ("local_0"): each cell's rows from the cells
@@ -28,6 +28,12 @@
    the pairs' resistances summed and inverted (pairwise-additive resistance, Stokesian dynamics'
    rule for lubrication), both from direct solves of each cell alone and each pair alone,
    against the whole system's solve, on the accuracy part's cases;
+1a'. three_body: the part the pairs leave out, D = M_system - M_pairs (the grand mobility and the
+   flow's motion, every pair from its snapshot), of a 4 x 4 patch 25 um apart at one height, on
+   several discretisations (THREE_BODY_MESHES: the k = 2 sphere with the constant density
+   unrefined and refined with ratios 0.5 and 1, the k = 2 and 3 spheres with the biquadratic
+   density unrefined), each against the finest (largest change over the largest entry of that
+   one's whole system): whether the part is converged, and which coarse mesh gives it;
 1b. cut-off: the error of leaving out pairs beyond 50-150 um on an 8 x 8 patch 25 um apart,
    against every pair (all from pair snapshots, no far field);
 1b'. far: two cells at 12-200 um along a line 30 degrees off the flow, each alone plus the far
@@ -75,7 +81,7 @@
    Cholesky (O(p^3), before it), interleaved cell count by cell count.
 
     python benchmarks/many_cells.py
-        [--parts accuracy resistance cutoff far close train lattice reuse factors batch cost implicit]
+        [--parts accuracy resistance three_body cutoff far close train lattice reuse factors batch cost implicit]
         [--runs RUN.h5 ...] [--quick]
         [--cells N ...] [--system-cells N ...] [--remainder-cells N ...] [--cases KIND:N:UM ...]
         [--refinement R] [--solver-paths] [--device cuda:0]
@@ -116,11 +122,15 @@ REST = A + 236e-9  # m: centre height where gravity and eq. 3.1 balance (benchma
 # the state diagram's rolling point on stiff bonds (scenes/rolling_cells.toml)
 ROLLING = dict(spring_constant=0.1, equilibrium_length=30e-9, off_rate=1.0, reactive_compliance=0.6e-10,
                on_rate=365.0, receptor_density=20e12, max_bonds=200)
-# the accuracy part's coarse remainders: column name -> contact refinement ratio of the k = 2
-# sphere (24 elements: 0 leaves it so, 0.5 and 1 split it to 108 and 252 elements at the rolling
-# height, the default 3 to 1632); time-stepped models' defaults otherwise (density order 1)
-COARSE_REMAINDERS = {f"remainder_{ratio:g}": ratio for ratio in (0.0, 0.5, 1.0)}
+# the accuracy part's coarse remainders: column suffix -> (contact refinement ratio, density order)
+# of the k = 2 sphere (24 elements: 0 leaves it so, 0.5 and 1 split it to 108 and 252 elements at
+# the rolling height, the default 3 to 1632; order 1 the time-stepped models' constant density, 3
+# the biquadratic one of dynamics/many_body.py)
+COARSE_REMAINDERS = {"0": (0.0, 1), "0.5": (0.5, 1), "1": (1.0, 1), "0_p3": (0.0, 3)}
 COARSE_K = 2
+# --parts three_body's discretisations (k, density order, contact refinement), the reference last
+# (the k = 4 biquadratic sphere, 41 500 unknowns for 16 cells, peaked at 20 GB: not run on 24 GB)
+THREE_BODY_MESHES = [(2, 1, 0.0), (2, 1, 0.5), (2, 1, 1.0), (2, 3, 0.0), (3, 3, 0.0)]
 # the local remainder's clusters: the cells within this many pitches of each (two cells on in a
 # line, so that an end cell's cluster holds the cell that screens it from the next; 1.5 left the
 # flow's error of three cells in a line 25 um apart at 9.3e-4, the pairs')
@@ -130,6 +140,13 @@ LOCAL_RADIUS = 2.05
 MODES = {"pairs": dict(grand_mobility="pairs"), "remainder": dict(grand_mobility="pairs", many_body="coarse"),
          "system": dict(grand_mobility="system")}
 EXACT = dict(reuse_tolerance=1e-12, reuse_interaction=1e-12, pair_lateral=1e-12)  # lattices below round-off
+# the accuracy part's solver paths (column prefix -> options): every pair from its snapshot, with
+# and without the close pairs' films; the far field beyond near_radius; the lattices; the remainder
+SOLVER_PATHS = {"pairwise": dict(EXACT, grand_mobility="pairs", far_field="none", close_clusters="none"),
+                "pairwise_no_films": dict(EXACT, grand_mobility="pairs", far_field="none", close_pairs="lattice"),
+                "pairs_far": dict(EXACT, grand_mobility="pairs"),
+                "pairs_lattices": dict(reuse_tolerance=2e-9, grand_mobility="pairs"),
+                "pairs_remainder": dict(EXACT, grand_mobility="pairs", many_body="coarse")}
 
 
 def arrangement(kind, n, spacing, seed=1):
@@ -168,8 +185,10 @@ def coarse_parts(device, positions, coarse_k, options):
     t = time.perf_counter()
     system = motion(Motion.of(hydro.mobility.solve(bodies)), hydro._grand_mobility(bodies))
     wall = time.perf_counter() - t
+    # every pair from its snapshot, as dynamics/many_body.py takes them (no far field)
     pairs, alone = (motion(*solves(mesh, len(bodies), device, **EXACT, grand_mobility="pairs", pair_cutoff=cutoff,
-                                   **options)._snapshot(bodies)) for cutoff in (DEFAULT_PAIR_CUTOFF, 0.0))
+                                   far_field="none", **options)._snapshot(bodies))
+                    for cutoff in (DEFAULT_PAIR_CUTOFF, 0.0))
     return system, wall, pairs, alone
 
 
@@ -199,11 +218,12 @@ def local_remainder(device, positions, coarse_k, options, radius):
     return (0.5 * (q + q.T), u), wall, largest
 
 
-def accuracy(device, cases, k, refinement=None, extras=True):
+def accuracy(device, cases, k, refinement=None, extras=True, paths=None):
     """Part 1 on ``cases`` ((arrangement, cells, spacing)), every solve but the coarse remainders'
     on the k sphere refined with ``refinement`` (default: the time-stepped models' 3); without
     ``extras`` the solver's own paths only (no coarse remainders at other refinements, no local
-    clusters)."""
+    clusters); ``paths`` the names of SOLVER_PATHS to run (default all; with extras "pairwise"
+    is needed)."""
     mesh = wb.mesh.sphere(A, k)
     fine = {} if refinement is None else dict(contact_refinement=refinement)
     rows, progress = [], Progress(len(cases))
@@ -217,13 +237,9 @@ def accuracy(device, cases, k, refinement=None, extras=True):
         row = dict(arrangement=kind, cells=n, spacing_um=spacing * 1e6, k=k,
                    refinement=hydro.model.solver.contact_refinement, system_s=t_system)
         approximations = {}
-        for name, options in (("pairwise", dict(EXACT, grand_mobility="pairs", far_field="none",
-                                                close_clusters="none")),
-                              ("pairwise_no_films", dict(EXACT, grand_mobility="pairs", far_field="none",
-                                                         close_pairs="lattice")),
-                              ("pairs_far", dict(EXACT, grand_mobility="pairs")),
-                              ("pairs_lattices", dict(reuse_tolerance=2e-9, grand_mobility="pairs")),
-                              ("pairs_remainder", dict(EXACT, grand_mobility="pairs", many_body="coarse"))):
+        for name, options in SOLVER_PATHS.items():
+            if paths is not None and name not in paths:
+                continue
             pairs = solves(mesh, n, device, **options, **fine)
             t = time.perf_counter()
             approximations[name] = motion(*pairs._snapshot(bodies))
@@ -232,23 +248,24 @@ def accuracy(device, cases, k, refinement=None, extras=True):
                         f"{name}_snapshots": pairs.snapshots_solved})
         approximations["alone"] = motion(*solves(mesh, n, device, **EXACT, grand_mobility="pairs", pair_cutoff=0.0,
                                                  **fine)._snapshot(bodies))
-        pairwise_grand, pairwise_flow = approximations["pairwise"]
         row["alone_grand"], row["alone_flow"] = change(approximations["alone"], exact)
         if not extras:
             rows.append(row)
             print_table([row])
             progress.done(f"accuracy: {kind} of {n} cells, {spacing * 1e6:g} um apart")
             continue
-        for name, ratio in COARSE_REMAINDERS.items():  # added to the pairs at the cells' own positions
+        pairwise_grand, pairwise_flow = approximations["pairwise"]
+        for suffix, (ratio, order) in COARSE_REMAINDERS.items():  # added to the pairs at the cells' own positions
             if ratio >= row["refinement"]:
                 continue  # no coarser than the reference itself
-            system, wall, pairs, alone = coarse_parts(device, positions, COARSE_K, dict(contact_refinement=ratio))
-            row[f"{name}_grand"], row[f"{name}_flow"] = change(
+            system, wall, pairs, alone = coarse_parts(device, positions, COARSE_K,
+                                                      dict(contact_refinement=ratio, density_order=order))
+            row[f"remainder_{suffix}_grand"], row[f"remainder_{suffix}_flow"] = change(
                 tuple(a + s - p for a, s, p in zip(approximations["pairwise"], system, pairs)), exact)
-            row[f"{name}_system_s"] = wall
+            row[f"remainder_{suffix}_system_s"] = wall
             # the coupling itself from the coarse pairs: each fine cell alone plus the coarse pairs'
             # part (their pairs' snapshots minus the coarse cells alone)
-            row[f"coarse_pairs_{ratio:g}_grand"], row[f"coarse_pairs_{ratio:g}_flow"] = change(
+            row[f"coarse_pairs_{suffix}_grand"], row[f"coarse_pairs_{suffix}_flow"] = change(
                 tuple(a + p - c for a, p, c in zip(approximations["alone"], pairs, alone)), exact)
         (grand, flow), wall, largest = local_remainder(device, positions, COARSE_K, dict(contact_refinement=0.0),
                                                        LOCAL_RADIUS * spacing)
@@ -314,6 +331,32 @@ def resistance_error(device, cases, k):
                          resistance_flow=resistance_flow))
         print_table([rows[-1]])
         progress.done(f"resistance: {kind} of {n} cells, {spacing * 1e6:g} um apart")
+    return rows
+
+
+def three_body_convergence(device, n, spacing, meshes):
+    """Part 1a': the pairs' left-out part D = system - pairs of a patch of n cells at one height
+    on each of ``meshes`` ((k, density order, contact refinement)), each against the last's."""
+    positions = arrangement("patch", n, spacing)
+    positions[:, 2] = REST  # one height, so that the pairs' snapshots recur by offset
+    parts, progress = [], Progress(len(meshes))
+    for k, order, ratio in meshes:
+        t = time.perf_counter()
+        # dense whatever the size: "auto" would take the treecode for the largest, one product per load
+        system, wall, pairs, _ = coarse_parts(device, positions, k, dict(contact_refinement=ratio, density_order=order,
+                                                                        operator="dense"))
+        parts.append((system, [a - b for a, b in zip(system, pairs)], wall, time.perf_counter() - t))
+        progress.done(f"three_body: k = {k}, p = {order}, ratio {ratio:g}")
+    reference_system, reference, _, _ = parts[-1]
+    scale = [np.abs(x).max() for x in reference_system]
+    rows = []
+    for (k, order, ratio), (_, part, wall, total) in zip(meshes, parts):
+        size, off = ([np.abs(x).max() / largest for x, largest in zip(values, scale)] for values in
+                     (part, [a - b for a, b in zip(part, reference)]))
+        rows.append(dict(cells=n, spacing_um=spacing * 1e6, k=k, density_order=order, refinement=ratio,
+                         part_grand=size[0], part_flow=size[1], off_reference_grand=off[0], off_reference_flow=off[1],
+                         system_s=wall, total_s=total))
+    print_table(rows)
     return rows
 
 
@@ -736,8 +779,8 @@ def cluster_mesh_error(device, gap, k):
 def main():
     parser = arguments(__doc__)
     parser.add_argument("--parts", nargs="+", default=["accuracy"],
-                        choices=["accuracy", "resistance", "cutoff", "lattice", "reuse", "factors", "batch", "cost",
-                                 "implicit", "far", "close", "train"])
+                        choices=["accuracy", "resistance", "three_body", "cutoff", "lattice", "reuse", "factors",
+                                 "batch", "cost", "implicit", "far", "close", "train"])
     parser.add_argument("--runs", nargs="*", default=[], help="run files for --parts reuse")
     parser.add_argument("--k", type=int, default=2, help="sphere mesh subdivisions")
     parser.add_argument("--cells", nargs="*", type=int, default=[],
@@ -752,6 +795,8 @@ def main():
                              " (default 3, the time-stepped models')")
     parser.add_argument("--solver-paths", action="store_true",
                         help="--parts accuracy: the solver's own paths only (pairs, far field, lattices, remainder)")
+    parser.add_argument("--paths", nargs="*", default=None, choices=list(SOLVER_PATHS),
+                        help="--parts accuracy with --solver-paths: the paths to run (default all)")
     parser.add_argument("--system-cells", nargs="*", type=int, default=None,
                         help="the counts of --parts cost solved as whole systems too (default 3)")
     args = parser.parse_args()
@@ -760,12 +805,18 @@ def main():
                  [("line", 3, 12e-6), ("line", 3, 25e-6), ("patch", 4, 25e-6), ("patch", 9, 25e-6)])
         if args.cases:
             cases = [(kind, int(n), float(um) * 1e-6) for kind, n, um in (c.split(":") for c in args.cases)]
-        rows = accuracy(args.device, cases, args.k, args.refinement, extras=not args.solver_paths)
+        if args.paths is not None and not args.solver_paths:
+            parser.error("--paths chooses among --solver-paths")
+        rows = accuracy(args.device, cases, args.k, args.refinement, extras=not args.solver_paths, paths=args.paths)
         print(f"wrote {write_csv('many_cells_accuracy.csv', rows)}")
     if "resistance" in args.parts:
         cases = [("line", 3, 25e-6)] if args.quick else [("line", 3, 12e-6), ("line", 3, 25e-6), ("patch", 4, 25e-6)]
         rows = resistance_error(args.device, cases, args.k)
         print(f"wrote {write_csv('many_cells_resistance.csv', rows)}")
+    if "three_body" in args.parts:
+        meshes = [THREE_BODY_MESHES[0], THREE_BODY_MESHES[3]] if args.quick else THREE_BODY_MESHES
+        rows = three_body_convergence(args.device, 4 if args.quick else 16, 25e-6, meshes)
+        print(f"wrote {write_csv('many_cells_three_body.csv', rows)}")
     if "cutoff" in args.parts:
         rows = cutoff_error(args.device, 4 if args.quick else 8, 25e-6, [50e-6, 75e-6, 100e-6, 150e-6], args.k)
         print(f"wrote {write_csv('many_cells_cutoff.csv', rows)}")

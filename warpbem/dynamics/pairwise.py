@@ -21,9 +21,9 @@ neighbours; 1.7e-3 and 1.2e-2 in a 4 x 4 one), and by 3.5e-2 at 12 um in a line 
 the surfaces, where the middle cell screens the outer two). In a close train that part is
 taken in resistance from the cluster's own solve on a coarser discretisation (``[solver]
 close_clusters``, ``close_clusters.py``, added with the films). In a patch, the part left out,
-taken from a coarse mesh's whole system (24-element cells), cuts the 4 x 4 patch's errors to
-1.3e-4 and 1.7e-3 (``[solver] many_body = "coarse"``, ``many_body.py``, added to the assembly
-here).
+taken from a coarse mesh's whole system (24-element cells, biquadratic density), cuts the 4 x 4
+patch's errors to 2.1e-4 and 3.8e-4 (``[solver] many_body = "coarse"``, ``many_body.py``, added
+to the assembly here).
 
 A pair above the wall in shear is invariant under translation along the wall, so its snapshot
 is computed with its first cell at x = y = 0 and shared by every pair of cells of the same

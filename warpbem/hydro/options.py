@@ -48,8 +48,9 @@ GRAND_MOBILITIES = ("system", "pairs")
 MANY_BODY_REMAINDERS = ("none", "coarse")
 # m: the lateral lattice of the many-body remainder's snapshots (dynamics/many_body.py): nine cells
 # of a 3 x 3 patch 25 um apart each moved at random within +-0.5 um (+-1 um) of their positions
-# raised the remainder's error from 1.2e-4 / 8.9e-4 (grand mobility / flow) to 1.5e-4 / 1.1e-3
-# (1.8e-4 / 1.3e-3; a script of the session that measured benchmarks/many_cells.py --parts accuracy)
+# raised the remainder's error (the constant density's) from 1.2e-4 / 8.9e-4 (grand mobility /
+# flow) to 1.5e-4 / 1.1e-3 (1.8e-4 / 1.3e-3; a script beside benchmarks/many_cells.py --parts
+# accuracy); with the biquadratic density the 3 x 3 patch on this lattice errs by 2.2e-4 / 3.1e-4
 DEFAULT_MANY_BODY_LATERAL = 1e-6
 # m: the pair lattice at contact distance (dynamics/pairwise.py), interpolated bilinearly: 250 nm
 # up to 1.32 contact distances (13.2 um between 5 um cells), 2 um at 25 um; two cells 12.5 um
@@ -190,11 +191,12 @@ class SolverOptions:
                                  " in a line 25 um apart, 7.5e-3 in a 3 x 3 patch, 1.2e-2 in a 4 x 4 one;"
                                  " dynamics/pairwise.py, docs/many-cells.md)", choices=GRAND_MOBILITIES)
     many_body: str = option("none", "with grand_mobility = 'pairs', 'coarse' adds the part the pairs leave out (three"
-                            " cells and more) from coarse cells (the k = 2 sphere, 24 elements, unrefined): their"
-                            " whole system's solve minus their pairs, kept on a lattice of many_body_lateral. 4 x 4"
-                            " cells 25 um apart: 1.3e-4 / 1.7e-3 of the grand mobility / flow's motion against the"
-                            " pairs' 1.7e-3 / 1.2e-2; 2 um between the cells: 4.2e-3 of the flow's against 1.9e-2"
-                            " (dynamics/many_body.py, docs/many-cells.md)",
+                            " cells and more) from coarse cells (the k = 2 sphere, 24 elements, unrefined, with the"
+                            " biquadratic density; the constant density beyond about 40 cells, where that system"
+                            " is not dense): their whole system's solve minus their pairs, kept on a lattice of"
+                            " many_body_lateral. 4 x 4 cells 25 um apart: 2.1e-4 / 3.8e-4 of the grand mobility /"
+                            " flow's motion against the pairs' 1.7e-3 / 1.2e-2 (dynamics/many_body.py,"
+                            " docs/many-cells.md). Cells near contact take close_clusters instead",
                             choices=MANY_BODY_REMAINDERS)
     many_body_lateral: float = option(DEFAULT_MANY_BODY_LATERAL, "with many_body = 'coarse', the lateral lattice of"
                                       " the cells' positions the remainder is solved at", "m", low=0.0, high=1e-4,
