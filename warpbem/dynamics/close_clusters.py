@@ -32,7 +32,9 @@ at 0.2 um between the surfaces and 1.2e-2-2.6e-2 / 1.8e-2-2.0e-2 at 0.35-2 um; w
 and 1.6e-5 / 1.5e-5 or less from 0.5 um. The cluster mesh's solve of three cells and their new
 pairs takes 2-6 s (the difference of the benchmark's two times). Taken in mobility from coarse
 cells, as ``many_body.py`` takes its remainder, the same three cells 0.5 um apart on the k = 3
-sphere stay 1.9e-2 from their whole system (``--parts accuracy``, "pairs_remainder").
+sphere stay 6.5e-3 / 2.9e-3 from their whole system, where the close clusters' part leaves
+6.3e-4 / 1.4e-3, the k = 3 cells' own three-body error (``--parts accuracy --k 3``,
+"pairs_remainder" and "pairs_far").
 
 R_3 is a snapshot keyed by the cluster's meshes and its cells' positions relative to its first,
 snapped along the wall to CLUSTER_LATERAL and in height to the pair lattice (``reuse_interaction``):
