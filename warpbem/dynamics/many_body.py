@@ -57,7 +57,7 @@ from ..hydro.operators.forms import choose_mode
 from ..surfaces.body import Body
 from ..surfaces.mesh import sphere
 from ..surfaces.placement import PlacementError, check_placement
-from .model import Model, build_solver
+from .model import Model, build_solver, density_unknowns
 
 # the coarse cells: the k = 2 sphere (24 elements), not refined near contact
 COARSE_SUBDIVISIONS = 2
@@ -92,7 +92,7 @@ class ManyBodyRemainder:
         tiny = self.lateral / PAIR_LATTICE_SHARE
         device = hydro.mobility.device
         order = COARSE_DENSITY_ORDER
-        unknowns = sum(3 * order**2 * len(meshes[r].elements) for r in radii)
+        unknowns = density_unknowns([meshes[r] for r in radii], order)
         if choose_mode(unknowns, model.solver.dtype, device) != "dense":
             warnings.warn(f"many_body = 'coarse': the coarse system of {len(radii)} cells with the biquadratic"
                           f" density ({unknowns} unknowns) does not fit a dense matrix on {device}; the"
@@ -100,7 +100,6 @@ class ManyBodyRemainder:
                           " motion off on 4 x 4 cells where the biquadratic is 3.8e-4 (docs/many-cells.md)",
                           RuntimeWarning, stacklevel=2)
             order = LARGE_PATCH_DENSITY_ORDER
-        self.density_order = order
         options = replace(model.solver.without_accuracy(), many_body="none", far_field="none",
                           contact_refinement=COARSE_REFINEMENT, density_order=order,
                           reuse_tolerance=tiny, reuse_interaction=tiny, reuse_lateral=None, pair_lateral=tiny)

@@ -97,6 +97,12 @@ class StepPolicy:
         return remaining / math.ceil(remaining / planned - 1e-9)
 
 
+def density_unknowns(meshes, density_order: int) -> int:
+    """The unknowns of a mobility problem of ``meshes`` before contact refinement: 3 per density
+    point, density_order^2 of them per element (``hydro/geometry.py``)."""
+    return 3 * density_order**2 * sum(len(m.elements) for m in meshes)
+
+
 @dataclass(frozen=True)
 class Model:
     """Bodies (``meshes`` in metres about their reference points, ``fixed`` flags, ``names``),
@@ -166,11 +172,10 @@ class Model:
         solve, at the time-stepping default's) of every body, or with grand_mobility = "pairs" of
         the two largest cells (the pairs never solve the whole system: a patch of 256 cells would
         otherwise solve its pair snapshots on the treecode its whole system would need)."""
-        order = self.solver.density_order or TIME_STEPPING_DENSITY_ORDER
-        elements = sorted(len(m.elements) for m in self.meshes)
+        meshes = sorted(self.meshes, key=lambda m: len(m.elements))
         if self.solver.grand_mobility == "pairs":
-            elements = elements[-2:]
-        return 3 * order**2 * sum(elements)
+            meshes = meshes[-2:]
+        return density_unknowns(meshes, self.solver.density_order or TIME_STEPPING_DENSITY_ORDER)
 
     @cached_property
     def fixed_mask(self) -> np.ndarray:
